@@ -1,0 +1,71 @@
+"""clearance_contact: contact forces of 3-D clearance joints (numpy only).
+
+Poses and velocities in, wrenches out (SI units, world axes); the interface
+contract is ``docs/contact-api.md``.
+
+* :mod:`.errors`: ``ContactError``, ``ContactParameterError``;
+* :mod:`.materials`: ``Material`` and Hertz-type stiffnesses;
+* :mod:`.normal_force`: Lankarani-Nikravesh law, ``ONSET_RATE_FLOOR``, Hertz impact peak;
+* :mod:`.friction`: Brown-McPhee, Coulomb, no friction;
+* :mod:`.result`: ``JointContact``;
+* :mod:`.spherical`: ``SphericalClearanceJoint``;
+* :mod:`.revolute`: ``RevoluteClearanceJoint``.
+"""
+
+from .errors import ContactError, ContactParameterError
+from .friction import BrownMcPheeFriction, CoulombFriction, FrictionLaw, NoFriction, ScalarFrictionLaw
+from .materials import (
+    STEEL,
+    Material,
+    combined_modulus,
+    cylinder_line_stiffness,
+    flat_punch_stiffness,
+    hertz_sphere_stiffness,
+)
+from .normal_force import (
+    EXPONENT_RANGE,
+    ONSET_RATE_FLOOR,
+    HertzImpactMaximum,
+    hertz_impact_maximum,
+    hysteresis_factor,
+    lankarani_nikravesh,
+    validate_normal_law,
+)
+from .result import KIND_LINE, KIND_NONE, KIND_PLANE, KIND_POINT, JointContact
+from .spherical import SphericalClearanceJoint
+
+try:  # TEMPORARY while revolute.py is being written concurrently
+    from .revolute import RevoluteClearanceJoint
+except ModuleNotFoundError as exc:  # pragma: no cover
+    if exc.name != f"{__name__}.revolute":
+        raise
+
+__all__ = [
+    "ContactError",
+    "ContactParameterError",
+    "Material",
+    "STEEL",
+    "combined_modulus",
+    "hertz_sphere_stiffness",
+    "cylinder_line_stiffness",
+    "flat_punch_stiffness",
+    "ONSET_RATE_FLOOR",
+    "EXPONENT_RANGE",
+    "lankarani_nikravesh",
+    "hysteresis_factor",
+    "validate_normal_law",
+    "HertzImpactMaximum",
+    "hertz_impact_maximum",
+    "FrictionLaw",
+    "ScalarFrictionLaw",
+    "BrownMcPheeFriction",
+    "CoulombFriction",
+    "NoFriction",
+    "JointContact",
+    "KIND_NONE",
+    "KIND_POINT",
+    "KIND_LINE",
+    "KIND_PLANE",
+    "SphericalClearanceJoint",
+    "RevoluteClearanceJoint",
+]

@@ -1,0 +1,43 @@
+"""The library's exceptions. Each message says what is wrong and how to fix it."""
+
+from __future__ import annotations
+
+
+class RobotError(Exception):
+    """Base class of every error raised by the ``robot`` package."""
+
+
+class MechanismFileError(RobotError, ValueError):
+    """A URDF file or its closure declarations are malformed or inconsistent."""
+
+
+class ClearanceChoiceError(RobotError, ValueError):
+    """A clearance joint names a joint that does not exist or cannot carry clearance."""
+
+
+class KinematicsError(RobotError):
+    """Base class of kinematic failures (pose, assembly, singularity, stroke)."""
+
+
+class UnreachablePoseError(KinematicsError, ValueError):
+    """A platform pose cannot be reached by the limbs (or the assembly did not converge)."""
+
+
+class SingularConfigurationError(KinematicsError):
+    """The constraint or actuation Jacobian is (numerically) rank deficient."""
+
+
+class StrokeLimitError(KinematicsError, ValueError):
+    """An actuator length lies outside its stroke limits."""
+
+
+class SceneError(RobotError, ValueError):
+    """A scene file is malformed: unknown key, wrong type or value out of range."""
+
+
+class ResultFileError(RobotError, ValueError):
+    """A result file is missing, malformed or from another mechanism."""
+
+
+class SimulationError(RobotError):
+    """A simulation could not proceed (raised internally; runs report it in their result)."""
