@@ -275,6 +275,12 @@ def build_mechanism(
     q_index, v_index, lower, upper = [], [], [], []
     for name in description.actuated_joints:
         joint_id = model.getJointId(name)
+        if model.nqs[joint_id] != 1 or model.nvs[joint_id] != 1:
+            raise MechanismFileError(
+                f"actuated joint {name!r} is a {description.joints[name].kind} joint stored by Pinocchio with "
+                f"nq = {model.nqs[joint_id]} (cos, sin): a driving constraint needs one coordinate; declare it "
+                "'revolute' with wide limits (e.g. lower=\"-1e4\" upper=\"1e4\") to prescribe its angle"
+            )
         q_index.append(model.idx_qs[joint_id])
         v_index.append(model.idx_vs[joint_id])
         declaration = description.joints[name]

@@ -59,6 +59,8 @@ class PlatformLayout:
     def from_mechanism(cls, mechanism: Mechanism, platform_link: str = "platform") -> "PlatformLayout":
         model = mechanism.model
         description = mechanism.description
+        if not model.existFrame(platform_link, pin.FrameType.BODY):
+            raise UnreachablePoseError(f"mechanism {mechanism.name!r} has no link {platform_link!r}: not a UPS/RPS platform")
         platform_joint = model.frames[model.getFrameId(platform_link, pin.FrameType.BODY)].parentJoint
         if model.joints[platform_joint].shortname() != "JointModelFreeFlyer":
             raise UnreachablePoseError(f"platform link {platform_link!r} must hang on a floating joint")
@@ -86,7 +88,7 @@ class PlatformLayout:
                 axis = model.jointPlacements[chain[0]].rotation @ np.array(description.joints[model.names[chain[0]]].axis)
             elif len(chain) == 2 and kinds[0] == "JointModelFreeFlyer":
                 kind = "RPS"  # R replaced by a clearance free-flyer: geometry as the ideal joint
-                axis = np.array(description.joints[model.names[chain[0]]].axis)
+                axis = model.jointPlacements[chain[0]].rotation @ np.array(description.joints[model.names[chain[0]]].axis)
             else:
                 raise UnreachablePoseError(f"limb of {actuator!r}: chain {kinds} is neither U-P-S nor R-P-S")
             if max(abs(x) for x in closure.parent.xyz) > 0:
@@ -236,7 +238,10 @@ def inverse_kinematics(layout: PlatformLayout, pose: np.ndarray, *, check: bool 
             angle = _axis_angle(axis, u)
             first = limb.joint_ids[0]
             if model.joints[first].shortname() == "JointModelFreeFlyer":
-                placement = model.jointPlacements[first] * pin.SE3(pin.exp3(axis * angle), np.zeros(3))
+                # the free-flyer's q is the placement relative to the joint origin (as for the
+                # ideal revolute joint): a rotation about the axis expressed in the joint frame
+                local_axis = model.jointPlacements[first].rotation.T @ axis
+                placement = pin.SE3(pin.exp3(local_axis * angle), np.zeros(3))
                 q[model.idx_qs[first] : model.idx_qs[first] + 7] = pin.SE3ToXYZQUAT(placement)
             else:
                 q[model.idx_qs[first]] = angle

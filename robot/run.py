@@ -1,0 +1,111 @@
+"""From a scene to a result: build the model the scene needs, set the initial state, integrate.
+
+The data flow is one way: scene (TOML) + URDF -> :class:`Run` (mechanism,
+dynamics model, initial state) -> :class:`robot.simulation.Trajectory` ->
+:class:`robot.results.SimulationResult` -> result file.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Callable
+
+import numpy as np
+import pinocchio as pin
+
+from . import dynamics as D
+from .errors import SceneError
+from .initial_state import initial_state
+from .mechanism import Mechanism, build_mechanism
+from .platform_kinematics import PlatformLayout, inverse_kinematics
+from .results import SimulationResult, make_result, mechanism_fingerprint
+from .scene import Scene, load_scene, misalignment_rotation
+from .simulation import integrate
+from .trajectory import POSE_COORDINATES, FourierCoordinate, JointTrajectory, PlatformTrajectory, reference_platform_motion
+
+
+@dataclass(frozen=True, eq=False)
+class Run:
+    """Everything needed to integrate one scene."""
+
+    scene: Scene
+    mechanism: Mechanism
+    dynamics: D.DynamicsModel
+    y0: np.ndarray
+    layout: PlatformLayout | None
+
+    @property
+    def t_span(self) -> tuple[float, float]:
+        return 0.0, self.scene.duration
+
+
+def _coordinate(table: dict) -> FourierCoordinate:
+    return FourierCoordinate(
+        float(table.get("offset", 0.0)),
+        float(table.get("rate", 0.0)),
+        tuple(float(a) for a in table.get("amplitudes", ())),
+        tuple(float(h) for h in table.get("harmonics", ())),
+        tuple(float(p) for p in table.get("phases", ())),
+    )
+
+
+def make_drive(scene: Scene, mechanism: Mechanism) -> tuple[D.Drive, PlatformLayout | None]:
+    spec = scene.trajectory
+    if spec.kind == "platform":
+        layout = PlatformLayout.from_mechanism(mechanism)
+        if spec.preset == "reference":
+            return reference_platform_motion(layout, spec.period), layout
+        coordinates = tuple(_coordinate(spec.coordinates[name]) for name in POSE_COORDINATES)
+        return PlatformTrajectory(layout, spec.period, coordinates), layout
+    missing = [j for j in mechanism.actuated_joints if j not in spec.coordinates]
+    extra = [j for j in spec.coordinates if j not in mechanism.actuated_joints]
+    if missing or extra:
+        raise SceneError(
+            f"scene {scene.name}: a joint trajectory needs one entry per actuated joint {mechanism.actuated_joints}; "
+            f"missing {missing}, not actuated {extra}"
+        )
+    return JointTrajectory(spec.period, tuple(_coordinate(spec.coordinates[j]) for j in mechanism.actuated_joints)), None
+
+
+def build_run(scene: Scene | str | Path, **overrides) -> Run:
+    """Build the mechanism with exactly the scene's clearance joints, its dynamics and initial state."""
+    if not isinstance(scene, Scene):
+        scene = load_scene(scene, **overrides)
+    mechanism = build_mechanism(scene.mechanism_path, {c.joint: c.outer_on for c in scene.clearances})
+    drive, layout = make_drive(scene, mechanism)
+    if not mechanism.model.existFrame(scene.end_effector):
+        raise SceneError(f"scene {scene.name}: end_effector={scene.end_effector!r} is not a frame of the mechanism")
+    dynamics = D.make_dynamics_model(
+        mechanism, {c.joint: c.law for c in scene.clearances}, drive, scene.baumgarte, scene.end_effector
+    )
+    if layout is not None:
+        pose, _, _ = drive.pose(0.0)
+        q_guess, _ = inverse_kinematics(layout, pose)
+    else:
+        q_guess = pin.neutral(mechanism.model)
+    misalignment = {joint: misalignment_rotation(angle) for joint, angle in scene.misalignment_deg.items()}
+    y0 = initial_state(mechanism, q_guess, drive.drive(0.0), misalignment)
+    return Run(scene, mechanism, dynamics, y0, layout)
+
+
+def run_scene(run: Run, progress: Callable[[float], None] | None = None) -> SimulationResult:
+    """Integrate a built run and compute its outputs (never raises on divergence: see ``status``)."""
+    scene = run.scene
+    trajectory = integrate(run.dynamics, run.y0, run.t_span, scene.solver, scene.limits, progress)
+    metadata = {
+        "mechanism": str(scene.mechanism_path.name),
+        "urdf_sha256": mechanism_fingerprint(run.mechanism.description.urdf_text),
+        "clearance": list(scene.clearance_joints),
+        "scene_file": str(scene.path.name) if scene.path else None,
+        "method": scene.solver.method,
+        "rtol": scene.solver.rtol,
+        "atol": scene.solver.atol,
+        "max_step": scene.solver.max_step,
+        "baumgarte": [scene.baumgarte.alpha, scene.baumgarte.beta],
+        "duration": scene.duration,
+        "actuated_joints": list(run.mechanism.actuated_joints),
+        "nq": run.mechanism.model.nq,
+        "nv": run.mechanism.model.nv,
+    }
+    return make_result(scene.name, run.dynamics, trajectory, metadata)
