@@ -34,11 +34,7 @@ from .normal_force import (
 from .result import KIND_LINE, KIND_NONE, KIND_PLANE, KIND_POINT, JointContact
 from .spherical import SphericalClearanceJoint
 
-try:  # TEMPORARY while revolute.py is being written concurrently
-    from .revolute import RevoluteClearanceJoint
-except ModuleNotFoundError as exc:  # pragma: no cover
-    if exc.name != f"{__name__}.revolute":
-        raise
+from .revolute import RevoluteClearanceJoint
 
 __all__ = [
     "ContactError",

@@ -16,7 +16,7 @@ division by |v_t| (no NaN, no jump).  Each law exposes
 
 Brown & McPhee, "A continuous velocity-based friction model for dynamics and
 control with physically meaningful parameters", J. Comput. Nonlinear Dyn. 11(5)
-(2016) 054502; seed paper eq. (14)::
+(2016) 054502; seed paper eq. (14); in the form of MODEL-NOTES 4::
 
     f(v) = F_N [mu_k tanh(4 v / v_s) + (mu_s - mu_k) (v / v_s) / ((v/v_s)^2 / 4 + 3/4)^2]
            + mu_v v tanh(4 F_N / F_ref)
@@ -223,10 +223,11 @@ class CoulombFriction:
         v = np.asarray(slip_velocity, dtype=float)
         if v.shape != (3,):
             raise ValueError(f"slip_velocity must have shape (3,), got {v.shape}")
-        speed = math.hypot(*v.tolist())
-        if normal_force <= 0.0 or speed == 0.0:
+        largest = float(np.max(np.abs(v)))
+        if normal_force <= 0.0 or largest == 0.0:
             return np.zeros(3)
-        return (-self.friction_coefficient * float(normal_force)) * (v / speed)
+        direction = v / largest  # scaled first: exact unit vector even for subnormal slips
+        return (-self.friction_coefficient * float(normal_force) / math.hypot(*direction.tolist())) * direction
 
 
 class NoFriction:

@@ -35,6 +35,9 @@ on the socket (action = reaction)::
 
 The normal force passes through both centres and produces no moment.
 
+``kind`` is 1 (point) whenever delta > 0, also when the L-N force is clamped to 0
+(fast separation); 0 otherwise.
+
 If |e| = 0 (ball exactly centred) the normal is undefined; then delta = -c < 0 (no
 contact) and the socket's local z axis is reported as ``normal`` (finite output).
 

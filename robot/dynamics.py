@@ -137,6 +137,7 @@ class DynamicsWorkspace:
 
     data: pin.Data
     rhs_calls: int = 0
+    rejected_stages: int = 0  # trial stages in an absurd pose (see robot.simulation)
     simple_q: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=int))
     simple_v: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=int))
 
@@ -148,7 +149,7 @@ def make_workspace(dynamics: DynamicsModel) -> DynamicsWorkspace:
         if model.nqs[j] == model.nvs[j]:
             simple_q.extend(range(model.idx_qs[j], model.idx_qs[j] + model.nqs[j]))
             simple_v.extend(range(model.idx_vs[j], model.idx_vs[j] + model.nvs[j]))
-    return DynamicsWorkspace(model.createData(), 0, np.array(simple_q, dtype=int), np.array(simple_v, dtype=int))
+    return DynamicsWorkspace(model.createData(), simple_q=np.array(simple_q, dtype=int), simple_v=np.array(simple_v, dtype=int))
 
 
 def normalise_quaternions(mechanism: Mechanism, q: np.ndarray) -> np.ndarray:

@@ -8,7 +8,7 @@ control as the motion, so the energy balance
 ``Delta(T + V) = W_act + W_contact`` can be audited to integration accuracy. The loop steps a ``scipy.integrate.OdeSolver`` one accepted step at a
 time and, after each step:
 
-1. checks for failure (non-finite state, penetration beyond its physical bound,
+1. checks for failure (non-finite accepted state, penetration beyond its physical bound,
    constraint drift beyond tolerance, step-size collapse) and stops with the
    time and the cause, keeping every step already computed;
 2. scans the contact candidates for **onset** (penetration crossing zero
@@ -38,13 +38,15 @@ import numpy as np
 import pinocchio as pin
 from scipy.optimize import brentq
 
-from clearance_contact import ONSET_RATE_FLOOR
+from clearance_contact import ONSET_RATE_FLOOR, ContactError
 
 from . import constraints as C
 from . import dynamics as D
 from .integrators import FIXED_STEP_METHODS, STAGES, make_solver
 
 SUCCESS, FAILED = 0, -1
+#: restarts at one instant before the run is declared failed (contact events that make no progress)
+MAX_STALLED_RESTARTS = 20
 
 
 @dataclass(frozen=True)
@@ -144,14 +146,21 @@ def integrate(
     def rhs(t: float, y: np.ndarray) -> np.ndarray:
         q = D.normalise_quaternions(mechanism, y[:nq])
         v = y[nq : nq + nv]
-        evaluation = D.evaluate(dynamics, workspace, t, q, v, onset)
         out = np.empty(nq + nv + 2)
+        try:
+            evaluation = D.evaluate(dynamics, workspace, t, q, v, onset)
+        except ContactError:
+            # a trial stage of a too-large step can land in an absurd pose (e.g. a journal
+            # turned half round): answer with a non-finite derivative, which makes the
+            # step's error estimate non-finite, so the solver rejects the step and
+            # shrinks it. Accepted states are still checked and a real blow-up is reported.
+            out.fill(np.inf)
+            workspace.rejected_stages += 1
+            return out
         out[:nq] = D.configuration_rate(dynamics, workspace, q, v)
         out[nq : nq + nv] = evaluation.qdd
         out[nq + nv] = evaluation.driving_force(dynamics.constraints) @ v[actuated]
         out[nq + nv + 1] = evaluation.generalized_contact_force @ v
-        if not np.all(np.isfinite(out)):
-            raise _Failure("non-finite state", f"t={t:.9g} s: the accelerations are not finite")
         return out
 
     def probe(t: float, y: np.ndarray) -> tuple[np.ndarray, np.ndarray, float]:
@@ -184,6 +193,7 @@ def integrate(
         onset[k] = max(rate_old[k], ONSET_RATE_FLOOR)
     first_step = options.first_step
     n_rhs_total = 0
+    stalled = 0
     dense_calls = [0]
 
     def dense_output(solver):
@@ -227,18 +237,28 @@ def integrate(
                         if found is not None:
                             candidates_t.append((found, k))
                 if candidates_t:
-                    t_event, k = min(candidates_t)
+                    t_event = min(candidates_t)[0]
                     y_event = _normalised_state(mechanism, dense(t_event), nq)
                     pen_e, rate_e, _ = probe(t_event, y_event)
                     _record_peaks(dense, probe, pen_old, rate_old, t_old, t_event, record, events, mechanism, nq)
-                    onset[k] = max(rate_e[k], ONSET_RATE_FLOOR)
-                    events.append((t_event, int(k), "onset", float(onset[k])))
+                    # every candidate touching at the event starts its impact now (simultaneous
+                    # onsets are common: a tilting bearing meets both flanges at once)
+                    starting = sorted({k for tk, k in candidates_t if tk <= t_event} | set(np.flatnonzero((pen_old <= 0) & (pen_e >= 0))))
+                    for k in starting:
+                        onset[k] = max(rate_e[k], ONSET_RATE_FLOOR)
+                        events.append((t_event, int(k), "onset", float(onset[k])))
                     record(t_event, y_event, RECORD_ONSET)
+                    if t_event <= t:
+                        stalled += 1
+                        if stalled > MAX_STALLED_RESTARTS:
+                            raise _Failure("event chattering", f"t={t_event:.9g} s: {stalled} contact events without progress in time")
+                    else:
+                        stalled = 0
                     t, y = t_event, y_event
                     pen_old, rate_old = pen_e, rate_e
-                    # the restart begins on the contact surface: count it as touching so the
-                    # same onset is not detected a second time at the restart
-                    pen_old[k] = max(pen_old[k], np.finfo(float).tiny)
+                    # the restart begins on the contact surface: count the starting candidates as
+                    # touching so the same onsets are not detected a second time
+                    pen_old[starting] = np.maximum(pen_old[starting], np.finfo(float).tiny)
                     restarted = True
                     break
                 # --- failure checks ---

@@ -8,11 +8,13 @@ each pose coordinate a truncated Fourier series::
     dc/dt = sum_i A_i h_i omega cos(h_i omega t + phi_i)
     d2c/dt2 = -sum_i A_i (h_i omega)^2 sin(h_i omega t + phi_i)
 
-Reference motion (``REFERENCE_PLATFORM_MOTION``, T = 1 s): ``x = 0.03 sin(wt)``,
+Reference motion (``reference_platform_motion``, T = 1 s): ``x = 0.03 sin(wt)``,
 ``z = 1.20 + 0.02 sin(2wt)``, ``roll = 0.05 sin(wt + pi/4)``,
 ``pitch = 0.04 sin(wt)``, ``yaw = 0.06 sin(wt + pi/2)`` (m, rad). Its actuator
-lengths stay in [1.17, 1.33] m (strokes [0.98, 1.55] m) and the actuation
-Jacobian's condition number below 14 (``tests/test_kinematics.py``).
+lengths stay in [1.18, 1.30] m (UPS legs 1.218-1.294 m, RPS leg 1.180-1.220 m;
+strokes [0.98, 1.55] m), the actuator rates within 0.38 m/s and accelerations
+within 4.1 m/s^2 (T = 1 s), and the actuation Jacobian's condition number between
+12.3 and 13.0 (``tests/test_kinematics.py``, ``docs/kinematics.md``).
 
 A :class:`PlatformTrajectory` maps the pose through the exact inverse
 kinematics (``platform_kinematics``), so the actuator rates and accelerations

@@ -21,7 +21,7 @@ import numpy as np
 from clearance_contact import STEEL, BrownMcPheeFriction, SphericalClearanceJoint
 from robot.atomic import atomic_write_text
 
-DEFAULT_OUT = Path("results") / "bench_contact.json"
+DEFAULT_OUT = Path(__file__).resolve().parents[1] / "results" / "bench_contact.json"
 FRICTION = BrownMcPheeFriction(static_coefficient=0.08, dynamic_coefficient=0.05, transition_velocity=1e-3)
 
 
@@ -65,7 +65,9 @@ def spherical_cases(repeats: int, number: int) -> dict:
 
 def revolute_cases(repeats: int, number: int) -> dict:
     """Journal 10 mm / bearing 10.1-20 mm, lengths 40.2 / 40 mm, steel, Brown-McPhee.
-    Misaligned: bearing tilted about x so that L_b/2 tan(tilt) = c_r + 5 um."""
+    Misaligned: bearing tilted about x so that L_b/2 tan(tilt) = c_r + 5 um (both radial
+    candidates in contact); the tilt also lifts the outer edge of each end face by
+    R_b2 sin(tilt) = 105 um > c_a/2 = 100 um, so all four candidates are in contact."""
     try:
         from clearance_contact import RevoluteClearanceJoint
     except ImportError as exc:

@@ -1,0 +1,1029 @@
+"""Revolute clearance joint: a flanged journal in a bearing, with radial and axial clearance.
+
+Seed paper, section "Mathematical description for 3D revolute clearance joint",
+eqs. (4)-(10) (geometry), (12)-(13) (line / plane force law), (14) (friction),
+(15) (force and moment on the bearing); MODEL-NOTES 3.  Published treatments of the
+same joint: Yan et al., Nonlinear Dyn. (2015), DOI 10.1007/s11071-014-1870-7;
+Marques, Isaac, Dourado, Flores, Mech. Mach. Theory 116 (2017) 123-144.
+
+Elements and frames (``docs/contact-api.md``)
+---------------------------------------------
+* **Bearing** (outer element): hollow cylinder, bore radius ``R_b1``, outer radius
+  ``R_b2``, length ``L_b``.  Frame origin at its midpoint, local z = its axis.  The
+  *top impact ring* is the end z = +L_b/2, the *bottom* one z = -L_b/2.
+* **Journal** (inner element): shaft of radius ``R_j`` between two flanges whose inner
+  faces are ``L_j`` apart (frame origin half-way between them, local z = its axis).  The
+  flanges are assumed to reach beyond the bearing's outer radius (flange radius >=
+  R_b2 + c_r), so an end face of the bearing always meets the flange face, never the
+  flange rim.
+* Clearances (seed paper eq. (4))::
+
+      c_r = R_b1 - R_j > 0        radial
+      c_a = L_j - L_b  > 0        axial (c_a / 2 on each side when centred)
+
+* Both frames' z axes point the same way: the journal's top flange (z = +L_j/2) faces the
+  bearing's top ring.  A journal axis at 90 deg or more from the bearing axis is not a
+  journal in a bearing and raises :class:`~clearance_contact.errors.ContactError`.
+
+Four candidates (seed paper Fig. 3-4), in the order of the contract::
+
+    0 top_radial      bearing bore near the top ring   vs journal surface (M_b / M_j)
+    1 top_axial       bearing top end face (annulus)   vs top flange face  (P_b / P_j)
+    2 bottom_radial   bearing bore near the bottom ring vs journal surface (N_b / N_j)
+    3 bottom_axial    bearing bottom end face          vs bottom flange    (Q_b / Q_j)
+
+Geometry (exact for any tilt below 90 deg unless stated)
+-------------------------------------------------------
+Work in the bearing frame.  With a0 = R_b^T (o_j - o_b) (journal origin) and
+d = R_b^T u_j (journal axis, d_z = cos(tilt) > 0), the journal axis crosses the plane
+z of the bearing at the radial offset (eccentricity, paper eqs. (5)-(7))::
+
+    e(z) = (a0_x, a0_y) + (z - a0_z) t,        t = (d_x, d_y) / d_z   (|t| = tan(tilt))
+
+which is *exactly linear* in z.  The journal's cross-section by that plane is an ellipse
+(semi-axes R_j and R_j / cos(tilt)), so the radial penetration of the journal beyond the
+bore in the slice z (paper eq. (8), generalised to a tilted journal) is::
+
+    delta(z) = max_n [ e(z).n + R_j sqrt(1 + (t.n)^2) ] - R_b1
+
+(the support function of the ellipse).  It is evaluated as::
+
+    delta(z) = |e| + R_j sqrt(1 + x) - R_b1,
+    x = ((t.e)^2 + beta^2 |t|^2) / (|e|^2 + beta^2),     beta = R_j tan^2(tilt)
+
+i.e. the support in the direction e/|e|, with the ellipse term blended so that it is
+smooth where the journal axis crosses the bearing axis and exact there (e = 0, e.g. a
+journal tilted about the joint centre: delta = R_j / cos(tilt) - R_b1).  Value and rate
+are continuous (except the cone of |e| at e = 0 itself), and
+|error| <= min(0.3 beta, beta^2 / (4 |e|)): 2.5e-13 m for a slice at |e| >= c_r = 0.1 mm
+of a 10 mm journal tilted by 1e-3 rad (the slices that matter for contact), at most
+0.3 beta = 3e-9 m anywhere at that tilt (checked in the tests).
+The distance is measured radially in the bearing's cross-section; along the journal's
+surface normal it differs by a factor 1 - O(tilt^2).  The exact delta(z) is convex in z
+(a maximum of functions affine in z), so its maximum over a half of the bearing lies at
+an end of that half: the ring (z = +-L_b/2) or the mid-plane (z = 0).
+
+Axial: with F_top = o_j + L_j/2 u_j (top flange face centre) the penetration of the
+point x = (x_1, x_2) of the bearing's top end face (radius R_b1 <= |x| <= R_b2) into the
+flange (paper eqs. (9)-(10)) is *exactly linear* in x::
+
+    delta(x) = (o_b + L_b/2 u_b + x_1 b_1 + x_2 b_2 - F_top) . u_j = delta_c + g . x
+    delta_c  = -a0.d + d_z L_b/2 - L_j/2,     g = (d_x, d_y),  |g| = sin(tilt)
+
+and for the bottom ring delta(x) = a0.d + d_z L_b/2 - L_j/2 - g . x.  The deepest point
+is on the outer rim: delta_max = delta_c + R_b2 |g|.
+
+``penetration`` (and ``JointContact.penetration``) is the deepest penetration of each
+candidate (radial: max of its two end slices; axial: delta_c + R_b2 |g|), and
+``penetration_rate`` is its exact time derivative (from the twists).  Where the deepest
+point jumps (two ends equally deep within 1e-14 m, or end faces parallel within
+1e-14 rad) the derivative has a kink and the right derivative (the larger one-sided
+rate, what the penetration does next) is reported.
+
+Contact law: distributed, continuous from point to line / plane contact
+-----------------------------------------------------------------------
+The paper uses the L-N law for misaligned (point) contact and K delta^n for line and
+plane contact (eqs. (11)-(13)); switching between them makes the force jump when the
+tilt crosses zero.  Here the line / plane law is instead *distributed over the contact
+region* (a Winkler-type elastic foundation, Johnson, Contact Mechanics 1985, Ch. 5; the
+same idea as the slicing technique for misaligned roller contacts, Harris & Kotzalas,
+Rolling Bearing Analysis, 5th ed. 2007), so that one formula covers every configuration:
+
+* **Radial**, per ring: over its half of the bearing length (s = |z| from 0 to
+  l = L_b/2) the penetration is taken linear between the exact values at the two ends
+  of the half, a = delta(0) and b = delta(+-l), and the line law is applied per unit
+  length, p(s) = (K_line / L_b) max(delta(s), 0)^n_r.  Integrated in closed form:
+  aligned (a = b) it gives exactly K_line/2 delta^n_r per ring, i.e. K_line delta^n_r
+  for the whole bearing (paper eq. (12), line contact); tilted, the contact shrinks
+  continuously to the ring's edge (edge / point contact).  The resultant acts at the
+  centroid s_c of p(s), along the eccentricity direction of that slice (projected
+  normal to the journal axis).  Error of the linear profile: none for a tilt in the
+  plane of the eccentricity (the common rocking case: |e(z)| is then linear); for a
+  sideways (skew) tilt t_perp the chord over-estimates the convex slice penetration by
+  at most (l t_perp)^2 / (8 |e|) (1e-7 m for l = 10 mm, t_perp = 1e-3, |e| = c_r =
+  0.1 mm), while both end values, hence the reported deepest penetration, keep the
+  slice accuracy above.
+* **Axial**, per ring: the plane law is distributed uniformly over the annulus,
+  p(x) = K_plane / (pi (R_b2^2 - R_b1^2)) max(delta(x), 0)^n_a: aligned it gives
+  exactly K_plane delta^n_a (paper eq. (13), plane contact); tilted, the contact is the
+  part of the annulus beyond a straight line, shrinking to the deepest rim point.
+  Force, centroid and second moment are computed as differences of disc integrals.
+  For n_a = 1 they are closed form (exact; for a crescent of rim half-angle below
+  0.5 rad, where the closed form cancels, the quadrature below is used: relative error
+  < 3e-11); for other n_a a 10-point Gauss-Legendre rule in the angle phi of
+  v = 1 - y0 cos^2(phi/2) (v the coordinate along g scaled by the radius, contact for
+  v > 1 - y0; both endpoint singularities smoothed, the integrand evaluated from the rim
+  penetration without cancellation), normalised to integrate a uniform pressure
+  exactly: relative error < 4e-6 on the force and < 5e-8 R_b2 on the centroid (worst
+  case: contact boundary near the far rim; < 1e-8 elsewhere), a smooth function of the
+  configuration (checked against adaptive quadrature in the tests).
+* **Damping** (L-N, paper eq. (11)): the elastic resultant F_el is multiplied by
+  [1 + 3 (1 - c_e^2)/4 * delta_dot / max(delta_dot_0, ONSET_RATE_FLOOR)], clamped at
+  >= 0 (:func:`~clearance_contact.normal_force.lankarani_nikravesh`), with delta_dot
+  the penetration rate *at the centroid*.  Because delta_dot is linear over the
+  region, this equals the pointwise L-N law integrated over it (exact for the force),
+  and it does not jump when the deepest point jumps (e.g. a flange face rocking through
+  zero tilt).  delta_dot_0 is the caller's onset rate of that candidate.
+
+All four forces are continuous functions of the configuration (no switching between
+formulas with different values), with a continuous point of application.
+
+``kind``: 0 no contact; 2 (line) when the whole half-length of a radial candidate is in
+contact, 3 (plane) when the whole annulus is, 1 (point) when only a part is (a tilted
+edge / rim contact).  Every aligned contact is 2 or 3; the classification is for
+reporting only, the force does not depend on it.
+
+Stiffness (defaults from :mod:`~clearance_contact.materials`, n = 1 each)
+-------------------------------------------------------------------------
+* K_line = pi/4 E* L_b (:func:`~clearance_contact.materials.cylinder_line_stiffness`,
+  contact length = bearing length, see its docstring for the derivation and status).
+* K_plane = 2 E* R_b2 (:func:`~clearance_contact.materials.flat_punch_stiffness`,
+  rigid flat punch of the annulus' outer radius: an upper bound for the annulus).
+* Other exponents need an explicit stiffness (N/m^n), as the defaults are linear laws.
+* ``point_stiffness`` / ``point_exponent`` are accepted and validated for the
+  interface contract but are not used: in the distributed formulation a point (edge /
+  rim) contact is the limit of the line / plane law over a shrinking region.
+
+Friction and wrenches (paper eqs. (14)-(15))
+--------------------------------------------
+Each active candidate's forces act at one point P, half-way between the two contact
+points at the centroid (the same point for both bodies: action = reaction exactly).
+Slip of the journal's material point at P relative to the bearing's:
+v = (v_j + w_j x (P - o_j)) - (v_b + w_b x (P - o_b)), tangential part v_t.  The
+contact region also spins about the normal at w_n = (w_j - w_b).n; with r_s the rms
+distance of the pressure from P (from the second moment of the distribution) this is
+a slip speed w_n r_s, and the friction law is evaluated at the combined speed
+sqrt(|v_t|^2 + (w_n r_s)^2) (elliptic limit-surface approximation of coupled
+sliding-spinning (Coulomb-Contensou) friction: Contensou, IUTAM Symp. Kreiselprobleme
+1962, Springer 1963; Leine & Glocker, Eur. J. Mech. A 22 (2003) 193; Howe & Cutkosky,
+Int. J. Robot. Res. 15 (1996) 557).  With g = f(v)/v of the friction law::
+
+    F_t = -g v_t,      T_spin = -g r_s^2 w_n  (about n)
+
+so a flange face turning on the bearing's end face (plane contact, centroid on the
+axis) carries a friction torque mu F_N r_s, and a single slip gives the plain law.
+(The exact Coulomb torque of a uniform pressure uses the mean radius instead of the rms
+one: r_s over-estimates it by 1 % for R_b1/R_b2 = 0.63, 6 % for a full disc.)
+On the journal: f = -F_N n + F_t at P, plus T_spin n; on the bearing the opposite.
+Wrenches are [force, moment about the element's frame origin], world axes.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numpy.typing import ArrayLike
+
+from .errors import ContactError, ContactParameterError, require_in_range, require_positive
+from .friction import FrictionLaw, NoFriction
+from .materials import Material, cylinder_line_stiffness, flat_punch_stiffness
+from .normal_force import EXPONENT_RANGE, lankarani_nikravesh, validate_normal_law
+from .result import KIND_LINE, KIND_NONE, KIND_PLANE, KIND_POINT, JointContact
+
+__all__ = ["RevoluteClearanceJoint"]
+
+_MIN_AXIS_COSINE = 1.0e-6
+"""Smallest accepted cos(tilt) = u_b . u_j (tilt < 89.99994 deg)."""
+
+_TIE_DEPTH = 1.0e-14
+"""Penetrations (m) closer than this count as equal when choosing the deepest end."""
+
+_TIE_TILT = 1.0e-14
+"""|sin(tilt)| below which the end faces count as parallel (rounding of unit vectors)."""
+
+_SERIES_EPS = 0.02
+"""|b - a| / (a + b) below which the radial moments use their Taylor series."""
+
+_CLOSED_FORM_MIN_ANGLE = 0.5
+"""Rim half-angle (rad) of the contact crescent below which the n = 1 disc integrals
+use the quadrature instead of the closed form (whose cancellation grows as angle^-2)."""
+
+_QUAD_POINTS = 10
+
+
+def _disc_rule(points: int, n: float) -> tuple[tuple[float, float, float, float], ...]:
+    """Nodes of the disc quadrature for the exponent n, phi = pi x:
+    (sin^2(phi/2), cos^2(phi/2), weight * pi/2 sin(phi), sin^2n(phi/2)).
+
+    x, weight: Gauss-Legendre on [0, 1]; pi/2 sin(phi) is d(sin^2(phi/2))/dx.
+    """
+    x, w = np.polynomial.legendre.leggauss(points)
+    x = 0.5 * (x + 1.0)
+    w = 0.5 * w
+    nodes = []
+    for xi, wi in zip(x.tolist(), w.tolist()):
+        sh2 = math.sin(0.5 * math.pi * xi) ** 2
+        nodes.append((sh2, math.cos(0.5 * math.pi * xi) ** 2, wi * 0.5 * math.pi * math.sin(math.pi * xi), sh2**n))
+    return tuple(nodes)
+
+
+def _x_minus_sin(x: float) -> float:
+    """x - sin(x) without cancellation (Taylor series below x = 1)."""
+    if x >= 1.0:
+        return x - math.sin(x)
+    x2 = x * x
+    # x^3/3! - x^5/5! + ... + x^17/17!  (truncation < x^19/19! < 1e-16 x^3/6)
+    series = 1.0 - x2 / 272.0
+    for k in (210.0, 156.0, 110.0, 72.0, 42.0, 20.0):
+        series = 1.0 - x2 / k * series
+    return x * x2 / 6.0 * series
+
+
+def _floats(x: ArrayLike) -> list:
+    try:
+        return x.tolist()  # type: ignore[union-attr]
+    except AttributeError:
+        return np.asarray(x, dtype=float).tolist()
+
+
+def _line_moments(a: float, b: float, n: float, bn: tuple) -> tuple[float, float, float]:
+    """Moments of p(u) = max(a + (b - a) u, 0)^n on u in [0, 1].
+
+    Returns (m0, u_c, var): integral, centroid and variance (about u_c) of p.
+    ``bn`` = binomial coefficients C(n, 1..6).  Needs max(a, b) > 0.
+    """
+    if a <= 0.0 or b <= 0.0:  # partial: a "triangle" x^n over the length lam
+        n1 = n + 1.0
+        n2 = n + 2.0
+        if a <= 0.0:
+            lam = b / (b - a)
+            m0 = lam * b**n / n1
+            u_c = 1.0 - lam / n2
+        else:
+            lam = a / (a - b)
+            m0 = lam * a**n / n1
+            u_c = lam / n2
+        var = lam * lam * (n1 / (n + 3.0) - (n1 / n2) ** 2)
+        return m0, u_c, var
+    s = a + b
+    eps = (b - a) / s
+    if -_SERIES_EPS < eps < _SERIES_EPS:
+        # (1/2) int_{-1}^{1} x^k (1 + eps x)^n dx, k = 0, 1, 2, as series in eps
+        b1, b2, b3, b4, b5, b6 = bn
+        e2 = eps * eps
+        phi0 = 1.0 + e2 * (b2 / 3.0 + e2 * (b4 / 5.0 + e2 * b6 / 7.0))
+        phi1 = eps * (b1 / 3.0 + e2 * (b3 / 5.0 + e2 * b5 / 7.0))
+        phi2 = 1.0 / 3.0 + e2 * (b2 / 5.0 + e2 * (b4 / 7.0 + e2 * b6 / 9.0))
+        r1 = phi1 / phi0
+        return (0.5 * s) ** n * phi0, 0.5 * (1.0 + r1), 0.25 * (phi2 / phi0 - r1 * r1)
+    n1 = n + 1.0
+    n2 = n + 2.0
+    n3 = n + 3.0
+    dl = b - a
+    an = a**n
+    bnn = b**n
+    q1 = (bnn * b - an * a) / n1
+    q2 = (bnn * b * b - an * a * a) / n2
+    q3 = (bnn * b * b * b - an * a * a * a) / n3
+    m0 = q1 / dl
+    m1 = (q2 - a * q1) / (dl * dl)
+    m2 = (q3 - 2.0 * a * q2 + a * a * q1) / (dl * dl * dl)
+    u_c = m1 / m0
+    return m0, u_c, m2 / m0 - u_c * u_c
+
+
+def _disc_moments(dc: float, q: float, r: float, n: float, rule: tuple) -> tuple[float, float, float]:
+    """Integrals over the disc |x| <= r of p = max(dc + q v, 0)^n, v = x_1 / r, q >= 0.
+
+    Returns (D0, D1, D2) = (int p dA, int p x_1 dA, int p |x|^2 dA).  ``rule``:
+    :func:`_disc_rule` for the exponent n.  In the chord
+    variable v (chord length 2 r sqrt(1 - v^2)), D_k = 2 r^2 int p m_k sqrt(1 - v^2) dv,
+    m = 1, r v, r^2 (1 + 2 v^2)/3, over the contact v in [1 - y0, 1] with
+    y0 = (dc + q)/q (partial; dc + q is the rim penetration) or y0 = 2 (full disc).
+    """
+    rim = dc + q
+    if rim <= 0.0:
+        return 0.0, 0.0, 0.0
+    full = dc >= q
+    y0 = 2.0 if full else rim / q
+    th0 = math.pi if full else 2.0 * math.asin(math.sqrt(0.5 * y0))  # contact half-angle on the rim
+    r2 = r * r
+    if n == 1.0 and th0 >= _CLOSED_FORM_MIN_ANGLE:
+        c0 = 1.0 - y0
+        s02 = y0 * (2.0 - y0)
+        s0 = math.sqrt(s02)
+        s03 = s02 * s0
+        s05 = s03 * s02
+        sin2 = 2.0 * s0 * c0
+        sin4 = 2.0 * sin2 * (c0 * c0 - s02)
+        ia = 0.5 * (th0 - s0 * c0)  # int_0^th0 sin^2
+        ib = s03 / 3.0  # int cos sin^2
+        ic = th0 / 8.0 - sin4 / 32.0  # int cos^2 sin^2
+        id_ = 3.0 * th0 / 8.0 - sin2 / 4.0 + sin4 / 32.0  # int sin^4
+        ie = s03 / 3.0 - s05 / 5.0  # int cos^3 sin^2
+        if_ = s05 / 5.0  # int cos sin^4
+        return (
+            2.0 * r2 * (dc * ia + q * ib),
+            2.0 * r2 * r * (dc * ib + q * ic),
+            2.0 * r2 * r2 * (dc * (ic + id_ / 3.0) + q * (ie + if_ / 3.0)),
+        )
+    # quadrature in phi: v = 1 - y0 cos^2(phi/2); the integrand p m_k sqrt(1 - v^2) is
+    # smooth in phi at both ends (sqrt and p^n endpoint singularities absorbed)
+    w_sum = s_0 = s_1 = s_2 = 0.0
+    if full:  # p = dc + q v > 0 everywhere
+        for _, ch2, wj, _ in rule:
+            omv = 2.0 * ch2  # 1 - v
+            v = 1.0 - omv
+            wt = wj * math.sqrt(omv * (2.0 - omv))
+            w_sum += wt
+            wp = wt * (dc + q * v) ** n
+            s_0 += wp
+            s_1 += wp * v
+            s_2 += wp * v * v
+    else:  # crescent: p = dc + q v = rim sin^2(phi/2) exactly, p^n = rim^n sin^2n(phi/2)
+        for _, ch2, wj, sh2n in rule:
+            omv = y0 * ch2
+            v = 1.0 - omv
+            wt = wj * math.sqrt(omv * (2.0 - omv))
+            w_sum += wt
+            wp = wt * sh2n
+            s_0 += wp
+            s_1 += wp * v
+            s_2 += wp * v * v
+        rim_n = rim**n
+        s_0 *= rim_n
+        s_1 *= rim_n
+        s_2 *= rim_n
+    # normalise to the exact int_{1-y0}^1 sqrt(1 - v^2) dv = (2 th0 - sin(2 th0)) / 4, so a
+    # uniform pressure (aligned faces) is integrated exactly
+    scale = 2.0 * r2 * 0.25 * _x_minus_sin(2.0 * th0) / w_sum
+    return scale * s_0, scale * r * s_1, scale * r2 * (s_0 + 2.0 * s_2) / 3.0
+
+
+class RevoluteClearanceJoint:
+    """Flanged journal (inner element) in a bearing (outer element) with radial and axial clearance.
+
+    See the module docstring for the geometry, the contact law and their accuracy.
+
+    Parameters
+    ----------
+    journal_radius:
+        R_j in m, range (0, bearing_inner_radius).
+    bearing_inner_radius, bearing_outer_radius:
+        R_b1, R_b2 in m: bore radius, range (journal_radius, inf); outer radius of the
+        bearing's end faces (the annulus R_b1..R_b2 meets the flanges), range
+        (bearing_inner_radius, inf).
+    journal_length:
+        L_j in m, distance between the inner faces of the two flanges, range
+        (bearing_length, inf).
+    bearing_length:
+        L_b in m, range (0, journal_length).
+    journal_material, bearing_material:
+        :class:`~clearance_contact.materials.Material` of each element.
+    restitution:
+        c_e of the L-N damping, range (0, 1].
+    radial_exponent, axial_exponent:
+        n_r, n_a of the line and plane laws, range [1, 1.5]; default 1 (linear laws of
+        the default stiffnesses).
+    point_exponent, point_stiffness:
+        Accepted and validated (range [1, 1.5]; None or (0, inf)) for the interface
+        contract; not used by the distributed formulation (module docstring).
+    friction:
+        A :class:`~clearance_contact.friction.FrictionLaw`; default no friction.
+    radial_stiffness:
+        K_line in N/m^n_r for the whole bearing length, range (0, inf); None: pi/4 E* L_b
+        (requires n_r = 1).
+    axial_stiffness:
+        K_plane in N/m^n_a for one whole annular face, range (0, inf); None: 2 E* R_b2
+        (requires n_a = 1).
+    """
+
+    __slots__ = (
+        "_r_j",
+        "_r_b1",
+        "_r_b2",
+        "_l_j",
+        "_l_b",
+        "_journal_material",
+        "_bearing_material",
+        "_restitution",
+        "_n_r",
+        "_n_a",
+        "_n_p",
+        "_k_line",
+        "_k_plane",
+        "_k_point",
+        "_friction",
+        "_force_over_speed",
+        "_frictionless",
+        "_binomials",
+        "_plane_density",
+        "_half_l_b",
+        "_half_l_j",
+        "_disc_rule",
+    )
+
+    n_candidates: int = 4
+
+    def __init__(
+        self,
+        journal_radius: float,
+        bearing_inner_radius: float,
+        bearing_outer_radius: float,
+        journal_length: float,
+        bearing_length: float,
+        journal_material: Material,
+        bearing_material: Material,
+        restitution: float = 0.9,
+        radial_exponent: float = 1.0,
+        axial_exponent: float = 1.0,
+        point_exponent: float = 1.5,
+        friction: FrictionLaw = NoFriction(),
+        radial_stiffness: float | None = None,
+        axial_stiffness: float | None = None,
+        point_stiffness: float | None = None,
+    ) -> None:
+        r_j = require_positive("journal_radius", journal_radius)
+        r_b1 = require_positive("bearing_inner_radius", bearing_inner_radius)
+        r_b2 = require_positive("bearing_outer_radius", bearing_outer_radius)
+        l_j = require_positive("journal_length", journal_length)
+        l_b = require_positive("bearing_length", bearing_length)
+        if not r_b1 > r_j:
+            raise ContactParameterError(
+                f"journal_radius={journal_radius!r} must be smaller than bearing_inner_radius="
+                f"{bearing_inner_radius!r} (radial clearance > 0; valid range (0, {r_b1:g}))"
+            )
+        if not r_b2 > r_b1:
+            raise ContactParameterError(
+                f"bearing_outer_radius={bearing_outer_radius!r} must be larger than bearing_inner_radius="
+                f"{bearing_inner_radius!r} (valid range ({r_b1:g}, inf))"
+            )
+        if not l_j > l_b:
+            raise ContactParameterError(
+                f"journal_length={journal_length!r} must be larger than bearing_length={bearing_length!r} "
+                f"(axial clearance > 0; valid range ({l_b:g}, inf))"
+            )
+        for name, material in (("journal_material", journal_material), ("bearing_material", bearing_material)):
+            if not isinstance(material, Material):
+                raise ContactParameterError(f"{name}={material!r} must be a clearance_contact.Material")
+        if not isinstance(friction, FrictionLaw):
+            raise ContactParameterError(
+                f"friction={friction!r} must implement FrictionLaw (coefficient(slip_speed), "
+                "force(normal_force, slip_velocity))"
+            )
+        n_r = require_in_range("radial_exponent", radial_exponent, *EXPONENT_RANGE)
+        n_a = require_in_range("axial_exponent", axial_exponent, *EXPONENT_RANGE)
+        n_p = require_in_range("point_exponent", point_exponent, *EXPONENT_RANGE)
+        if radial_stiffness is None:
+            if n_r != 1.0:
+                raise ContactParameterError(
+                    f"radial_exponent={radial_exponent!r} needs an explicit radial_stiffness: the default "
+                    "line stiffness pi/4 E* L_b (N/m) is valid for radial_exponent 1 only"
+                )
+            radial_stiffness = cylinder_line_stiffness(l_b, bearing_material, journal_material)
+        if axial_stiffness is None:
+            if n_a != 1.0:
+                raise ContactParameterError(
+                    f"axial_exponent={axial_exponent!r} needs an explicit axial_stiffness: the default "
+                    "flat-punch stiffness 2 E* R_b2 (N/m) is valid for axial_exponent 1 only"
+                )
+            axial_stiffness = flat_punch_stiffness(r_b2, bearing_material, journal_material)
+        k_line = require_positive("radial_stiffness", radial_stiffness)
+        k_plane = require_positive("axial_stiffness", axial_stiffness)
+        k_point = None if point_stiffness is None else require_positive("point_stiffness", point_stiffness)
+        ce = validate_normal_law(k_line, n_r, restitution)[2]
+
+        self._r_j = r_j
+        self._r_b1 = r_b1
+        self._r_b2 = r_b2
+        self._l_j = l_j
+        self._l_b = l_b
+        self._half_l_b = 0.5 * l_b
+        self._half_l_j = 0.5 * l_j
+        self._journal_material = journal_material
+        self._bearing_material = bearing_material
+        self._restitution = ce
+        self._n_r = n_r
+        self._n_a = n_a
+        self._n_p = n_p
+        self._k_line = k_line
+        self._k_plane = k_plane
+        self._k_point = k_point
+        self._plane_density = k_plane / (math.pi * (r_b2 * r_b2 - r_b1 * r_b1))
+        self._disc_rule = _disc_rule(_QUAD_POINTS, n_a)
+        self._friction = friction
+        self._force_over_speed = getattr(friction, "force_over_speed", None)
+        self._frictionless = isinstance(friction, NoFriction)
+        binomials = []
+        c = 1.0
+        for j in range(1, 7):
+            c *= (n_r - j + 1) / j
+            binomials.append(c)
+        self._binomials = tuple(binomials)
+
+    # -- parameters -----------------------------------------------------------------
+    @property
+    def radial_clearance(self) -> float:
+        """c_r = R_b1 - R_j (m)."""
+        return self._r_b1 - self._r_j
+
+    @property
+    def axial_clearance(self) -> float:
+        """c_a = L_j - L_b (m), total (c_a / 2 per side when centred)."""
+        return self._l_j - self._l_b
+
+    @property
+    def journal_radius(self) -> float:
+        return self._r_j
+
+    @property
+    def bearing_inner_radius(self) -> float:
+        return self._r_b1
+
+    @property
+    def bearing_outer_radius(self) -> float:
+        return self._r_b2
+
+    @property
+    def journal_length(self) -> float:
+        return self._l_j
+
+    @property
+    def bearing_length(self) -> float:
+        return self._l_b
+
+    @property
+    def journal_material(self) -> Material:
+        return self._journal_material
+
+    @property
+    def bearing_material(self) -> Material:
+        return self._bearing_material
+
+    @property
+    def restitution(self) -> float:
+        return self._restitution
+
+    @property
+    def radial_exponent(self) -> float:
+        return self._n_r
+
+    @property
+    def axial_exponent(self) -> float:
+        return self._n_a
+
+    @property
+    def point_exponent(self) -> float:
+        """Accepted for the contract; unused (see the module docstring)."""
+        return self._n_p
+
+    @property
+    def radial_stiffness(self) -> float:
+        """K_line (N/m^n_r), whole bearing length."""
+        return self._k_line
+
+    @property
+    def axial_stiffness(self) -> float:
+        """K_plane (N/m^n_a), one whole annular end face."""
+        return self._k_plane
+
+    @property
+    def point_stiffness(self) -> float | None:
+        """Accepted for the contract; unused (see the module docstring)."""
+        return self._k_point
+
+    @property
+    def friction(self) -> FrictionLaw:
+        return self._friction
+
+    def __repr__(self) -> str:
+        return (
+            f"RevoluteClearanceJoint(journal_radius={self._r_j!r}, bearing_inner_radius={self._r_b1!r}, "
+            f"bearing_outer_radius={self._r_b2!r}, journal_length={self._l_j!r}, "
+            f"bearing_length={self._l_b!r}, journal_material={self._journal_material!r}, "
+            f"bearing_material={self._bearing_material!r}, restitution={self._restitution!r}, "
+            f"radial_exponent={self._n_r!r}, axial_exponent={self._n_a!r}, point_exponent={self._n_p!r}, "
+            f"friction={self._friction!r}, radial_stiffness={self._k_line!r}, "
+            f"axial_stiffness={self._k_plane!r}, point_stiffness={self._k_point!r})"
+        )
+
+    # -- geometry -------------------------------------------------------------------
+    def _slice(self, ex: float, ey: float, tx: float, ty: float, beta: float) -> float:
+        """Radial penetration of the slice with eccentricity (ex, ey); beta = R_j |t|^2."""
+        ee = ex * ex + ey * ey
+        d = ee + beta * beta
+        s = tx * ex + ty * ey
+        x = (s * s + beta * beta * (tx * tx + ty * ty)) / d if d > 0.0 else 0.0
+        return math.sqrt(ee) + self._r_j * math.sqrt(1.0 + x) - self._r_b1
+
+    def penetration(
+        self,
+        outer_rotation: ArrayLike,
+        outer_position: ArrayLike,
+        inner_rotation: ArrayLike,
+        inner_position: ArrayLike,
+    ) -> np.ndarray:
+        """(4,) deepest penetration (m) of [top_radial, top_axial, bottom_radial, bottom_axial].
+
+        Positive = contact.  Cheap (for event functions): no velocities, no forces.
+        """
+        (r00, r01, r02), (r10, r11, r12), (r20, r21, r22) = _floats(outer_rotation)
+        jr = _floats(inner_rotation)
+        ujx = jr[0][2]
+        ujy = jr[1][2]
+        ujz = jr[2][2]
+        pbx, pby, pbz = _floats(outer_position)
+        pjx, pjy, pjz = _floats(inner_position)
+        dpx = pjx - pbx
+        dpy = pjy - pby
+        dpz = pjz - pbz
+        ax = r00 * dpx + r10 * dpy + r20 * dpz
+        ay = r01 * dpx + r11 * dpy + r21 * dpz
+        az = r02 * dpx + r12 * dpy + r22 * dpz
+        dx = r00 * ujx + r10 * ujy + r20 * ujz
+        dy = r01 * ujx + r11 * ujy + r21 * ujz
+        dz = r02 * ujx + r12 * ujy + r22 * ujz
+        if not dz > _MIN_AXIS_COSINE:
+            self._raise_tilt(dz)
+        tx = dx / dz
+        ty = dy / dz
+        hl = self._half_l_b
+        mx = ax - az * tx
+        my = ay - az * ty
+        beta = self._r_j * (tx * tx + ty * ty)
+        d_mid = self._slice(mx, my, tx, ty, beta)
+        d_top = self._slice(mx + hl * tx, my + hl * ty, tx, ty, beta)
+        d_bot = self._slice(mx - hl * tx, my - hl * ty, tx, ty, beta)
+        ad = ax * dx + ay * dy + az * dz
+        base = hl * dz - self._half_l_j
+        gr2 = math.hypot(dx, dy) * self._r_b2
+        return np.array((max(d_mid, d_top), (base - ad) + gr2, max(d_mid, d_bot), (base + ad) + gr2))
+
+    @staticmethod
+    def _raise_tilt(dz: float) -> None:
+        if not math.isfinite(dz):
+            raise ContactError(f"non-finite pose (u_b . u_j = {dz!r}): check for NaN or inf in the rotations")
+        angle = math.degrees(math.acos(max(-1.0, min(1.0, dz))))
+        raise ContactError(
+            f"journal axis at {angle:.4f} deg from the bearing axis (u_b . u_j = {dz!r}): a journal "
+            "cannot turn by 90 deg in its bearing; check that both frames' z axes point the same way"
+        )
+
+    # -- evaluation -----------------------------------------------------------------
+    def evaluate(
+        self,
+        outer_rotation: ArrayLike,
+        outer_position: ArrayLike,
+        outer_twist: ArrayLike,
+        inner_rotation: ArrayLike,
+        inner_position: ArrayLike,
+        inner_twist: ArrayLike,
+        onset_rates: ArrayLike,
+    ) -> JointContact:
+        """Contact state and wrenches (module docstring for the equations).
+
+        ``outer_*`` is the bearing, ``inner_*`` the journal: rotations (3, 3) frame ->
+        world, positions (3,), twists (6,) = [v, w] of the frame origin in world axes;
+        ``onset_rates`` (4,) the approach rates recorded at the onset of the current
+        impact of each candidate (floored by the L-N law).
+        """
+        try:
+            (r00, r01, r02), (r10, r11, r12), (r20, r21, r22) = _floats(outer_rotation)
+            (j00, j01, j02), (j10, j11, j12), (j20, j21, j22) = _floats(inner_rotation)
+            pbx, pby, pbz = _floats(outer_position)
+            pjx, pjy, pjz = _floats(inner_position)
+            vbx, vby, vbz, wbx, wby, wbz = _floats(outer_twist)
+            vjx, vjy, vjz, wjx, wjy, wjz = _floats(inner_twist)
+            onsets = _floats(onset_rates)
+            if len(onsets) != 4:
+                raise ValueError
+        except (ValueError, TypeError):
+            raise ValueError(
+                "expected rotations (3, 3), positions (3,), twists (6,) and onset_rates (4,)"
+            ) from None
+
+        r_b1 = self._r_b1
+        r_j = self._r_j
+        hl = self._half_l_b
+        # journal axis and origin in the bearing frame (a0, d) and their rates
+        dpx = pjx - pbx
+        dpy = pjy - pby
+        dpz = pjz - pbz
+        ax = r00 * dpx + r10 * dpy + r20 * dpz
+        ay = r01 * dpx + r11 * dpy + r21 * dpz
+        az = r02 * dpx + r12 * dpy + r22 * dpz
+        dx = r00 * j02 + r10 * j12 + r20 * j22
+        dy = r01 * j02 + r11 * j12 + r21 * j22
+        dz = r02 * j02 + r12 * j12 + r22 * j22
+        if not dz > _MIN_AXIS_COSINE:
+            self._raise_tilt(dz)
+        # d(o_j - o_b)/dt seen from the bearing: dv - w_b x dp
+        qx = vjx - vbx - (wby * dpz - wbz * dpy)
+        qy = vjy - vby - (wbz * dpx - wbx * dpz)
+        qz = vjz - vbz - (wbx * dpy - wby * dpx)
+        adx = r00 * qx + r10 * qy + r20 * qz
+        ady = r01 * qx + r11 * qy + r21 * qz
+        adz = r02 * qx + r12 * qy + r22 * qz
+        # d(u_j)/dt seen from the bearing: (w_j - w_b) x u_j
+        wrx = wjx - wbx
+        wry = wjy - wby
+        wrz = wjz - wbz
+        ux = wry * j22 - wrz * j12
+        uy = wrz * j02 - wrx * j22
+        uz = wrx * j12 - wry * j02
+        ddx = r00 * ux + r10 * uy + r20 * uz
+        ddy = r01 * ux + r11 * uy + r21 * uz
+        ddz = r02 * ux + r12 * uy + r22 * uz
+
+        # ---- radial: slices z = 0, +l, -l; e(z) = m + z t ------------------------------
+        tx = dx / dz
+        ty = dy / dz
+        tdx = (ddx * dz - dx * ddz) / (dz * dz)
+        tdy = (ddy * dz - dy * ddz) / (dz * dz)
+        mx = ax - az * tx
+        my = ay - az * ty
+        mdx = adx - adz * tx - az * tdx
+        mdy = ady - adz * ty - az * tdy
+        # slice penetration |e| + R_j sqrt(1 + x) - R_b1 and its rate (module docstring),
+        # x = ((t.e)^2 + beta^2 |t|^2) / (|e|^2 + beta^2), beta = R_j |t|^2
+        tt = tx * tx + ty * ty
+        tt_dot = 2.0 * (tx * tdx + ty * tdy)
+        beta = r_j * tt
+        bb = beta * beta
+        bbd = beta * r_j * tt_dot  # beta d(beta)/dt
+        bbtt = bb * tt
+        bbtt_dot = 2.0 * bbd * tt + bb * tt_dot
+        t_abs = math.sqrt(tt)
+        slices = []
+        for z in (0.0, hl, -hl):
+            ex = mx + z * tx
+            ey = my + z * ty
+            edx = mdx + z * tdx
+            edy = mdy + z * tdy
+            ee = ex * ex + ey * ey
+            e = math.sqrt(ee)
+            if e > 0.0:
+                hx = ex / e
+                hy = ey / e
+                e_dot = hx * edx + hy * edy
+            else:  # on the bearing axis: direction of the tilt, right derivative of |e|
+                hx, hy = (tx / t_abs, ty / t_abs) if t_abs > 0.0 else (1.0, 0.0)
+                e_dot = math.hypot(edx, edy)
+            d = ee + bb
+            if d > 0.0:
+                sp = tx * ex + ty * ey
+                sp_dot = tdx * ex + tdy * ey + tx * edx + ty * edy
+                num = sp * sp + bbtt
+                x = num / d
+                x_dot = ((2.0 * sp * sp_dot + bbtt_dot) * d - 2.0 * num * (ex * edx + ey * edy + bbd)) / (d * d)
+            else:
+                x = x_dot = 0.0
+            root = math.sqrt(1.0 + x)
+            slices.append((e + r_j * root - r_b1, e_dot + 0.5 * r_j * x_dot / root, hx, hy))
+        mid, top, bot = slices
+
+        # ---- axial: delta(x) = delta_c +- g.x on each end face -------------------------
+        ad = ax * dx + ay * dy + az * dz
+        ad_dot = adx * dx + ady * dy + adz * dz + ax * ddx + ay * ddy + az * ddz
+        g = math.hypot(dx, dy)
+        base = hl * dz - self._half_l_j
+        base_dot = hl * ddz
+        if g > _TIE_TILT:
+            gx = dx / g
+            gy = dy / g
+            g_dot = gx * ddx + gy * ddy
+        else:  # parallel faces: kink of |g|, right derivative |g_dot| (towards where it tilts)
+            g_dot = math.hypot(ddx, ddy)
+            if g_dot > 0.0:
+                gx = ddx / g_dot
+                gy = ddy / g_dot
+            else:
+                gx, gy = 1.0, 0.0
+        r_b2 = self._r_b2
+        dc_top = base - ad
+        dc_bot = base + ad
+        dcd_top = base_dot - ad_dot
+        dcd_bot = base_dot + ad_dot
+
+        # axes (world) of both elements
+        b1x, b1y, b1z = r00, r10, r20
+        b2x, b2y, b2z = r01, r11, r21
+        ubx, uby, ubz = r02, r12, r22
+        ujx, ujy, ujz = j02, j12, j22
+
+        pen = [0.0, 0.0, 0.0, 0.0]
+        pen_rate = [0.0, 0.0, 0.0, 0.0]
+        kinds = [KIND_NONE, KIND_NONE, KIND_NONE, KIND_NONE]
+        geo = [None, None, None, None]  # (n, point_outer, delta at P's slice, F_el, rate_c, r_spin)
+
+        # ---- radial candidates 0 (top, z in [0, l]) and 2 (bottom, z in [-l, 0]) ------------
+        k_half = 0.5 * self._k_line
+        for k, end, ring in ((0, top, 1.0), (2, bot, -1.0)):
+            a, a_dot = mid[0], mid[1]
+            b, b_dot = end[0], end[1]
+            deep = b >= a
+            delta_max = b if deep else a
+            pen[k] = delta_max
+            if b - a > _TIE_DEPTH or a - b > _TIE_DEPTH:
+                pen_rate[k] = b_dot if deep else a_dot
+            else:  # kink of max(a, b): right derivative
+                pen_rate[k] = b_dot if b_dot > a_dot else a_dot
+            if delta_max > 0.0:
+                m0, u_c, var = _line_moments(a, b, self._n_r, self._binomials)
+                f_el = k_half * m0
+                kinds[k] = KIND_LINE if (a > 0.0 and b > 0.0) else KIND_POINT
+                z_c = ring * hl * u_c
+                rate_c = a_dot + (b_dot - a_dot) * u_c
+                delta_c = a + (b - a) * u_c
+                spin_radius = hl * math.sqrt(var) if var > 0.0 else 0.0
+                # eccentricity direction of the centroid's slice
+                ex = mx + z_c * tx
+                ey = my + z_c * ty
+                e = math.hypot(ex, ey)
+                if e > 0.0:
+                    hx = ex / e
+                    hy = ey / e
+                else:
+                    hx, hy = (end[2], end[3]) if deep else (mid[2], mid[3])
+            else:
+                f_el = rate_c = spin_radius = 0.0
+                z_c = ring * hl if deep else 0.0
+                delta_c = delta_max
+                hx, hy = (end[2], end[3]) if deep else (mid[2], mid[3])
+            # bearing-radial direction, then its part normal to the journal axis
+            rx = hx * b1x + hy * b2x
+            ry = hx * b1y + hy * b2y
+            rz = hx * b1z + hy * b2z
+            ru = rx * ujx + ry * ujy + rz * ujz
+            nx = rx - ru * ujx
+            ny = ry - ru * ujy
+            nz = rz - ru * ujz
+            nn = math.sqrt(nx * nx + ny * ny + nz * nz)
+            geo[k] = (
+                nx / nn,
+                ny / nn,
+                nz / nn,
+                pbx + z_c * ubx + r_b1 * rx,
+                pby + z_c * uby + r_b1 * ry,
+                pbz + z_c * ubz + r_b1 * rz,
+                delta_c,
+                f_el,
+                rate_c,
+                spin_radius,
+            )
+
+        # ---- axial candidates 1 (top face) and 3 (bottom face) --------------------------------
+        n_a = self._n_a
+        rule = self._disc_rule
+        gr2 = g * r_b2
+        gr1 = g * r_b1
+        for k, dcen, dcen_dot, ring in ((1, dc_top, dcd_top, 1.0), (3, dc_bot, dcd_bot, -1.0)):
+            # deepest-point direction on the face (bearing frame): +g at the top, -g at the bottom
+            sx = ring * gx
+            sy = ring * gy
+            delta_max = dcen + gr2
+            pen[k] = delta_max
+            pen_rate[k] = dcen_dot + r_b2 * g_dot
+            if delta_max > 0.0:
+                o0, o1, o2 = _disc_moments(dcen, gr2, r_b2, n_a, rule)
+                i0, i1, i2 = _disc_moments(dcen, gr1, r_b1, n_a, rule)
+                m0 = o0 - i0
+                f_el = self._plane_density * m0
+                kinds[k] = KIND_PLANE if dcen - gr2 > 0.0 else KIND_POINT
+                if m0 > 0.0 and g > _TIE_TILT:
+                    xc = (o1 - i1) / m0
+                    var = (o2 - i2) / m0 - xc * xc
+                elif m0 > 0.0:  # parallel faces: centroid on the axis
+                    xc = 0.0
+                    var = (o2 - i2) / m0
+                else:  # vanishing crescent at the rim
+                    xc = r_b2
+                    var = 0.0
+                delta_c = dcen + g * xc
+                # rate at the centroid: d(delta_c)/dt +- g_dot . x_c (same expression for both faces)
+                rate_c = dcen_dot + xc * (ddx * gx + ddy * gy)
+                spin_radius = math.sqrt(var) if var > 0.0 else 0.0
+            else:
+                f_el = rate_c = spin_radius = 0.0
+                xc = r_b2
+                delta_c = delta_max
+            cx = xc * sx
+            cy = xc * sy
+            # n = -u_j at the top flange, +u_j at the bottom one
+            geo[k] = (
+                -ring * ujx,
+                -ring * ujy,
+                -ring * ujz,
+                pbx + ring * hl * ubx + cx * b1x + cy * b2x,
+                pby + ring * hl * uby + cx * b1y + cy * b2y,
+                pbz + ring * hl * ubz + cx * b1z + cy * b2z,
+                delta_c,
+                f_el,
+                rate_c,
+                spin_radius,
+            )
+
+        # ---- forces (L-N on the distributed resultant), friction, wrenches --------------------
+        normals: list = []  # flat (4 x 3)
+        p_out: list = []
+        p_in: list = []
+        f_normal = [0.0, 0.0, 0.0, 0.0]
+        f_fric = [0.0] * 12
+        fix = fiy = fiz = 0.0  # force on the journal
+        mix = miy = miz = 0.0  # moment on the journal about o_j
+        mox = moy = moz = 0.0  # moment on the bearing about o_b
+        ce = self._restitution
+        frictionless = self._frictionless
+        gos = self._force_over_speed
+        for k in range(4):
+            nx, ny, nz, ox, oy, oz, delta_c, f_el, rate_c, spin_radius = geo[k]
+            normals += (nx, ny, nz)
+            p_out += (ox, oy, oz)
+            p_in += (ox + delta_c * nx, oy + delta_c * ny, oz + delta_c * nz)
+            if f_el <= 0.0:
+                continue
+            # L-N hysteresis on the distributed resultant (unit "penetration", stiffness F_el,
+            # exponent 1): F = F_el [1 + 3(1-ce^2)/4 rate_c / max(onset, floor)], clamped >= 0
+            force_n = lankarani_nikravesh(1.0, rate_c, onsets[k], f_el, 1.0, ce)
+            if force_n <= 0.0:
+                continue
+            f_normal[k] = force_n
+            half = 0.5 * delta_c
+            rjx = ox + half * nx - pjx  # P - o_j
+            rjy = oy + half * ny - pjy
+            rjz = oz + half * nz - pjz
+            rbx = rjx + dpx  # P - o_b
+            rby = rjy + dpy
+            rbz = rjz + dpz
+            fx = -force_n * nx
+            fy = -force_n * ny
+            fz = -force_n * nz
+            tsx = tsy = tsz = 0.0
+            if not frictionless:
+                # slip of the journal's material point at P relative to the bearing's
+                sx_ = vjx + (wjy * rjz - wjz * rjy) - vbx - (wby * rbz - wbz * rby)
+                sy_ = vjy + (wjz * rjx - wjx * rjz) - vby - (wbz * rbx - wbx * rbz)
+                sz_ = vjz + (wjx * rjy - wjy * rjx) - vbz - (wbx * rby - wby * rbx)
+                sn = sx_ * nx + sy_ * ny + sz_ * nz
+                vtx = sx_ - sn * nx
+                vty = sy_ - sn * ny
+                vtz = sz_ - sn * nz
+                spin = (wrx * nx + wry * ny + wrz * nz) * spin_radius
+                if gos is not None:
+                    gain = gos(force_n, math.sqrt(vtx * vtx + vty * vty + vtz * vtz + spin * spin))
+                    ftx = -gain * vtx
+                    fty = -gain * vty
+                    ftz = -gain * vtz
+                    t_spin = -gain * spin * spin_radius
+                else:  # generic FrictionLaw: slip + spin as one (3,) vector
+                    ff = _floats(
+                        self._friction.force(force_n, np.array((vtx + spin * nx, vty + spin * ny, vtz + spin * nz)))
+                    )
+                    fn_ = ff[0] * nx + ff[1] * ny + ff[2] * nz
+                    ftx = ff[0] - fn_ * nx
+                    fty = ff[1] - fn_ * ny
+                    ftz = ff[2] - fn_ * nz
+                    t_spin = fn_ * spin_radius
+                f_fric[3 * k] = ftx
+                f_fric[3 * k + 1] = fty
+                f_fric[3 * k + 2] = ftz
+                fx += ftx
+                fy += fty
+                fz += ftz
+                tsx = t_spin * nx
+                tsy = t_spin * ny
+                tsz = t_spin * nz
+            fix += fx
+            fiy += fy
+            fiz += fz
+            mix += rjy * fz - rjz * fy + tsx
+            miy += rjz * fx - rjx * fz + tsy
+            miz += rjx * fy - rjy * fx + tsz
+            mox -= rby * fz - rbz * fy + tsx
+            moy -= rbz * fx - rbx * fz + tsy
+            moz -= rbx * fy - rby * fx + tsz
+
+        if not math.isfinite(pen[0] + pen[1] + pen[2] + pen[3]):
+            raise ContactError(f"non-finite penetration {pen!r}: check the poses (NaN or inf input)")
+
+        # eccentricity: ring centres o_b +- l u_b relative to o_j, in the journal frame
+        cx = -(j00 * dpx + j10 * dpy + j20 * dpz)
+        cy = -(j01 * dpx + j11 * dpy + j21 * dpz)
+        cz = -(ujx * dpx + ujy * dpy + ujz * dpz)
+        ux_ = hl * (j00 * ubx + j10 * uby + j20 * ubz)
+        uy_ = hl * (j01 * ubx + j11 * uby + j21 * ubz)
+        uz_ = hl * dz
+        ecc = [cx + ux_, cy + uy_, cz + uz_, cx - ux_, cy - uy_, cz - uz_]
+
+        # one numpy array, viewed as the fields (the cheap path for small outputs)
+        out = np.fromiter(
+            pen + pen_rate + f_normal + normals + p_out + p_in + f_fric + ecc
+            + [-fix, -fiy, -fiz, mox, moy, moz, fix, fiy, fiz, mix, miy, miz],
+            float,
+            78,
+        )
+        vectors = out[12:66].reshape(18, 3)
+        return JointContact(
+            penetration=out[0:4],
+            penetration_rate=out[4:8],
+            normal=vectors[0:4],
+            point_outer=vectors[4:8],
+            point_inner=vectors[8:12],
+            normal_force=out[8:12],
+            friction_force=vectors[12:16],
+            kind=np.array(kinds),
+            eccentricity=vectors[16:18],
+            wrench_outer=out[66:72],
+            wrench_inner=out[72:78],
+        )

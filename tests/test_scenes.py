@@ -1,0 +1,99 @@
+"""Shipped scenes run; scene files are validated with clear errors."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from robot.errors import SceneError
+from robot.run import build_run, run_scene
+from robot.scene import load_scene, shipped_scenes
+
+
+def test_the_five_scenes_are_shipped():
+    assert set(shipped_scenes()) >= {"ideal", "spherical", "revolute", "compound", "compound_misaligned"}
+
+
+@pytest.mark.parametrize("name", ["spherical", "revolute", "compound", "compound_misaligned"])
+def test_clearance_scene_short_horizon(name):
+    """Each scene runs without error; penetrations stay far below the clearance (0.1 mm)."""
+    run = build_run(name, duration=0.03)
+    result = run_scene(run)
+    assert result.success, result.message
+    assert result["constraint_residual"].max() < 1e-8
+    for joint in result.clearance_joints:
+        assert result[f"{joint}_penetration"].max() < 0.2 * 1e-4
+        assert np.all(np.isfinite(result[f"{joint}_normal_force"]))
+
+
+def test_scene_builds_only_what_it_uses():
+    ideal, spherical, revolute, compound = (build_run(n, duration=0.01) for n in ("ideal", "spherical", "revolute", "compound"))
+    assert ideal.mechanism.model.nv == 20 and ideal.dynamics.n_candidates == 0
+    assert spherical.mechanism.model.nv == 20 and spherical.dynamics.n_candidates == 1
+    assert spherical.mechanism.n_closure_equations == 12
+    assert revolute.mechanism.model.nv == 25 and revolute.dynamics.n_candidates == 4
+    assert compound.mechanism.model.nv == 25 and compound.dynamics.n_candidates == 5
+
+
+def test_misaligned_scene_starts_with_the_bearing_rotated():
+    aligned = build_run("compound")
+    misaligned = build_run("compound_misaligned")
+    import pinocchio as pin
+
+    def bearing_tilt(run):
+        model = run.mechanism.model
+        data = model.createData()
+        pin.framesForwardKinematics(model, data, run.y0[: model.nq])
+        site = run.mechanism.site("R1")
+        outer, inner = data.oMf[site.outer_frame].rotation, data.oMf[site.inner_frame].rotation
+        return np.degrees(np.arccos(np.clip(outer[:, 2] @ inner[:, 2], -1, 1)))
+
+    assert bearing_tilt(aligned) == pytest.approx(0.0, abs=1e-7)
+    assert bearing_tilt(misaligned) == pytest.approx(0.035, abs=1e-6)
+
+
+def test_user_scene_by_path(tmp_path):
+    path = tmp_path / "mine.toml"
+    path.write_text('extends = "spherical"\nname = "mine"\nduration = 0.5\n')
+    scene = load_scene(str(path))
+    assert scene.name == "mine" and scene.duration == 0.5 and scene.clearance_joints == ("S1",)
+
+
+@pytest.mark.parametrize(
+    "text, message",
+    [
+        ('extends = "ideal"\nbogus = 1\n', "unknown key(s) bogus"),
+        ('extends = "ideal"\n[solver]\nmethod = "Euler"\n', "method='Euler' is not on offer"),
+        ('extends = "ideal"\n[solver]\nrtol = -1\n', "rtol=-1 is out of range"),
+        ('extends = "ideal"\nduration = 0\n', "duration=0 is out of range"),
+        ('extends = "ideal"\n[[clearance]]\njoint = "S1"\ntype = "spherical"\nball_radius = 0.015\nclearance = 0.0\n', "clearance"),
+        (
+            'extends = "ideal"\n[[clearance]]\njoint = "R1"\ntype = "revolute"\njournal_radius = 0.02\nradial_clearance = -1e-4\n'
+            "bearing_outer_radius = 0.03\nbearing_length = 0.04\naxial_clearance = 1e-4\n",
+            "R1",
+        ),
+        ('extends = "ideal"\n[[clearance]]\njoint = "S1"\ntype = "cylindrical"\n', "type='cylindrical'"),
+        ('extends = "ideal"\n[[clearance]]\njoint = "S1"\ntype = "spherical"\nball_radius = 0.015\nclearance = 1e-4\nmaterial = "gold"\n', "material='gold' is not defined"),
+        ('extends = "ideal"\nmechanism = "nowhere.urdf"\n', "does not exist"),
+        ("this is not toml", "not valid TOML"),
+        ('extends = "ideal"\n[initial]\nmisalignment_deg = { R1 = 0.035 }\n', "not a revolute clearance joint"),
+    ],
+)
+def test_bad_scene_files_give_clear_errors(tmp_path, text, message):
+    path = tmp_path / "bad.toml"
+    path.write_text(text)
+    with pytest.raises(SceneError, match=None) as info:
+        load_scene(str(path))
+    assert message in str(info.value)
+
+
+def test_unknown_scene_name():
+    with pytest.raises(SceneError, match="neither a file nor a shipped scene"):
+        load_scene("no_such_scene")
+
+
+def test_clearance_on_a_joint_that_does_not_exist(tmp_path):
+    path = tmp_path / "bad.toml"
+    path.write_text('extends = "spherical"\n[[clearance]]\njoint = "Q9"\ntype = "spherical"\nball_radius = 0.015\nclearance = 1e-4\n')
+    with pytest.raises(Exception, match="Q9"):
+        build_run(str(path))
