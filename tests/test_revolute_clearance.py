@@ -17,7 +17,6 @@ from clearance_contact import (
     ContactError,
     ContactParameterError,
     CoulombFriction,
-    Material,
     RevoluteClearanceJoint,
     cylinder_line_stiffness,
     flat_punch_stiffness,
@@ -530,10 +529,6 @@ def configurations(draw):
     tw_j = np.concatenate([draw(vec(0.5)), draw(vec(5.0))])
     onset = np.array([draw(st.floats(0.0, 1.0)) for _ in range(4)])
     return rb, pb, tw_b, rj, pj, tw_j, onset
-
-
-def in_contact(state) -> bool:
-    return bool(make_joint().evaluate(*state).in_contact.any())
 
 
 @settings(max_examples=150, deadline=None)
