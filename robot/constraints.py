@@ -28,6 +28,7 @@ linear velocity of the frame origin and angular velocity, in world axes).
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
 import pinocchio as pin
@@ -58,11 +59,11 @@ class ConstraintSet:
     closures: tuple[ClosureRows, ...]
     driven: bool
 
-    @property
+    @cached_property
     def n_closure_rows(self) -> int:
         return sum(c.closure.n_equations for c in self.closures)
 
-    @property
+    @cached_property
     def n_rows(self) -> int:
         return self.n_closure_rows + (self.mechanism.n_actuators if self.driven else 0)
 
@@ -112,14 +113,7 @@ def residual(constraints: ConstraintSet, data: pin.Data, q: np.ndarray, drive: n
     """
     phi = np.empty(constraints.n_rows)
     for rows in constraints.closures:
-        a, b = rows.closure.frame_a, rows.closure.frame_b
-        r = rows.row
-        phi[r : r + 3] = data.oMf[a].translation - data.oMf[b].translation
-        if rows.closure.kind == "revolute":
-            z_a = data.oMf[a].rotation[:, 2]
-            rotation_b = _frame_b_rotation(data, rows)
-            phi[r + 3] = z_a @ rotation_b[:, 0]
-            phi[r + 4] = z_a @ rotation_b[:, 1]
+        _closure_residual(constraints.mechanism.model, data, rows, phi)
     if constraints.driven:
         phi[constraints.driving_rows] = q[constraints.mechanism.actuator_q_index] - drive
     return phi
@@ -130,17 +124,7 @@ def jacobian(constraints: ConstraintSet, model: pin.Model, data: pin.Data) -> np
     mechanism = constraints.mechanism
     phi_q = np.zeros((constraints.n_rows, model.nv))
     for rows in constraints.closures:
-        a, b = rows.closure.frame_a, rows.closure.frame_b
-        r = rows.row
-        jac_a = pin.getFrameJacobian(model, data, a, LWA)
-        jac_b = pin.getFrameJacobian(model, data, b, LWA)
-        phi_q[r : r + 3] = jac_a[:3] - jac_b[:3]
-        if rows.closure.kind == "revolute":
-            z_a = data.oMf[a].rotation[:, 2]
-            rotation_b = _frame_b_rotation(data, rows)
-            relative = jac_a[3:] - jac_b[3:]
-            phi_q[r + 3] = np.cross(z_a, rotation_b[:, 0]) @ relative
-            phi_q[r + 4] = np.cross(z_a, rotation_b[:, 1]) @ relative
+        _closure_jacobian(model, data, rows, phi_q)
     if constraints.driven:
         phi_q[np.arange(constraints.driving_rows.start, constraints.n_rows), mechanism.actuator_v_index] = 1.0
     return phi_q
@@ -159,25 +143,7 @@ def gamma(
     """
     out = np.empty(constraints.n_rows)
     for rows in constraints.closures:
-        a, b = rows.closure.frame_a, rows.closure.frame_b
-        r = rows.row
-        acc_a = pin.getFrameClassicalAcceleration(model, data, a, LWA)
-        acc_b = pin.getFrameClassicalAcceleration(model, data, b, LWA)
-        out[r : r + 3] = -(acc_a.linear - acc_b.linear)
-        if rows.closure.kind == "revolute":
-            vel_a = pin.getFrameVelocity(model, data, a, LWA).angular
-            vel_b = pin.getFrameVelocity(model, data, b, LWA).angular
-            z_a = data.oMf[a].rotation[:, 2]
-            rotation_b = _frame_b_rotation(data, rows)
-            d_omega = vel_a - vel_b
-            d_alpha = acc_a.angular - acc_b.angular
-            z_a_dot = np.cross(vel_a, z_a)
-            for k in (0, 1):
-                axis_b = rotation_b[:, k]
-                axis_b_dot = np.cross(vel_b, axis_b)
-                cross = np.cross(z_a, axis_b)
-                cross_dot = np.cross(z_a_dot, axis_b) + np.cross(z_a, axis_b_dot)
-                out[r + 3 + k] = -(d_alpha @ cross + d_omega @ cross_dot)
+        _closure_gamma(model, data, rows, out)
     if constraints.driven:
         out[constraints.driving_rows] = drive_acceleration
     return out
@@ -189,3 +155,194 @@ def velocity_rhs(constraints: ConstraintSet, drive_rate: np.ndarray | None) -> n
     if constraints.driven:
         out[constraints.driving_rows] = drive_rate
     return out
+
+
+class ConstraintKernel:
+    """Phi, Phi_q and gamma of one :class:`ConstraintSet` on one ``pin.Data``, for the hot path.
+
+    The same equations as :func:`residual`, :func:`jacobian` and :func:`gamma`
+    (``tests/test_integrators.py`` checks them equal), organised for speed: the
+    frame translations are numpy *views* into the Pinocchio ``Data`` bound once
+    (they follow every kinematics update), the spherical closures' Jacobian rows
+    come from one ``getConstraintsJacobian`` call on ``CONTACT_3D`` /
+    ``LOCAL_WORLD_ALIGNED`` constraint models (the same rows ``p_a - p_b`` in world
+    axes), 3-vectors are handled as Python floats, and ``Phi_q`` is a buffer whose
+    constant driving rows are written once. Revolute closures (and centring rows)
+    use the reference code row by row.
+
+    Requires, at (q, v): ``computeAllTerms`` (or ``forwardKinematics(q, v, 0)`` +
+    ``computeJointJacobians``) and ``updateFramePlacements`` on ``data``.
+    """
+
+    def __init__(self, constraints: ConstraintSet, data: pin.Data):
+        mechanism = constraints.mechanism
+        model = mechanism.model
+        self.constraints = constraints
+        self.model = model
+        self.data = data
+        self.n_rows = constraints.n_rows
+        self.n_closure_rows = constraints.n_closure_rows
+        self.driven = constraints.driven
+        self.actuator_q = np.asarray(mechanism.actuator_q_index, dtype=int)
+        self._spherical = []  # (frame_a, frame_b, translation view a, translation view b)
+        self._others = []  # ClosureRows handled by the reference code
+        rows = []
+        self._models = pin.StdVec_RigidConstraintModel()
+        self._datas = pin.StdVec_RigidConstraintData()
+        for closure_rows in constraints.closures:
+            closure = closure_rows.closure
+            if closure.kind == "spherical":
+                fa, fb = model.frames[closure.frame_a], model.frames[closure.frame_b]
+                self._spherical.append(
+                    (closure.frame_a, closure.frame_b, data.oMf[closure.frame_a].translation, data.oMf[closure.frame_b].translation)
+                )
+                self._models.append(
+                    pin.RigidConstraintModel(pin.ContactType.CONTACT_3D, model, fa.parentJoint, fa.placement, fb.parentJoint, fb.placement, LWA)
+                )
+                rows.extend(range(closure_rows.row, closure_rows.row + 3))
+            else:
+                self._others.append(closure_rows)
+        for constraint_model in self._models:
+            self._datas.append(constraint_model.createData())
+        self._calcs = [(m.calc, d) for m, d in zip(self._models, self._datas)]
+        self._rows = np.array(rows, dtype=int)
+        # the spherical rows usually come first and contiguous: a slice is cheaper than fancy indexing
+        n_sph = len(rows)
+        self._sph_slice = slice(0, n_sph) if rows == list(range(n_sph)) else None
+        self.phi_q = np.zeros((self.n_rows, model.nv))
+        if self.driven:
+            self.phi_q[np.arange(constraints.driving_rows.start, self.n_rows), mechanism.actuator_v_index] = 1.0
+
+    def residual(self, q: np.ndarray, drive: np.ndarray | None) -> np.ndarray:
+        """Phi(q, t) (as :func:`residual`); needs frame placements only."""
+        values = []
+        for _, _, ta, tb in self._spherical:
+            xa, ya, za = ta.tolist()
+            xb, yb, zb = tb.tolist()
+            values += (xa - xb, ya - yb, za - zb)
+        return self._assemble(values, q[self.actuator_q] - drive if self.driven else None, _closure_residual)
+
+    def update(self, q: np.ndarray, drive: np.ndarray | None, drive_acceleration: np.ndarray | None) -> tuple[np.ndarray, np.ndarray]:
+        """Phi and gamma (new arrays); ``self.phi_q`` is overwritten with Phi_q."""
+        model, data = self.model, self.data
+        classical = pin.getFrameClassicalAcceleration
+        values, accelerations = [], []
+        for fa, fb, ta, tb in self._spherical:
+            xa, ya, za = ta.tolist()
+            xb, yb, zb = tb.tolist()
+            values += (xa - xb, ya - yb, za - zb)
+            # gamma = -(a_a - a_b) (classical accelerations at zero joint acceleration)
+            accelerations += (classical(model, data, fb, LWA) - classical(model, data, fa, LWA)).linear.tolist()
+        if self._spherical:
+            for calc, constraint_data in self._calcs:
+                calc(model, data, constraint_data)
+            jac = pin.getConstraintsJacobian(model, data, self._models, self._datas)
+            if self._sph_slice is not None:
+                self.phi_q[self._sph_slice] = jac
+            else:
+                self.phi_q[self._rows] = jac
+        phi = self._assemble(values, q[self.actuator_q] - drive if self.driven else None, _closure_residual)
+        gam = self._assemble(accelerations, drive_acceleration if self.driven else None, _closure_gamma)
+        for rows in self._others:
+            _closure_jacobian(model, data, rows, self.phi_q)
+        return phi, gam
+
+    def stabilised_drift(
+        self,
+        q: np.ndarray,
+        v: np.ndarray,
+        drive: np.ndarray | None,
+        drive_rate: np.ndarray | None,
+        drive_acceleration: np.ndarray | None,
+        two_alpha: float,
+        beta_squared: float,
+    ) -> np.ndarray:
+        """``2 alpha Phid + beta^2 Phi - gamma`` (minus the stabilised right-hand side), ``self.phi_q`` updated.
+
+        The fused form of :meth:`update` for the integrator's right-hand side.
+        """
+        if self._others or self._sph_slice is None:
+            phi, gam = self.update(q, drive, drive_acceleration)
+            phi_dot = self.phi_q @ v
+            if self.driven:
+                phi_dot[self.n_closure_rows :] -= drive_rate
+            return two_alpha * phi_dot + beta_squared * phi - gam
+        model, data = self.model, self.data
+        classical = pin.getFrameClassicalAcceleration
+        values = []
+        for fa, fb, ta, tb in self._spherical:
+            xa, ya, za = ta.tolist()
+            xb, yb, zb = tb.tolist()
+            # gamma = a_b - a_a (classical accelerations at zero joint acceleration)
+            gx, gy, gz = (classical(model, data, fb, LWA) - classical(model, data, fa, LWA)).linear.tolist()
+            values += (beta_squared * (xa - xb) - gx, beta_squared * (ya - yb) - gy, beta_squared * (za - zb) - gz)
+        for calc, constraint_data in self._calcs:
+            calc(model, data, constraint_data)
+        phi_q = self.phi_q
+        phi_q[self._sph_slice] = pin.getConstraintsJacobian(model, data, self._models, self._datas)
+        out = phi_q @ v
+        if self.driven:
+            # driving rows: 2 alpha (v_k - sd) + beta^2 (q_k - s) - sdd, with v_k = (Phi_q v)_k
+            values += (beta_squared * (q[self.actuator_q] - drive) - drive_acceleration - two_alpha * drive_rate).tolist()
+        out *= two_alpha
+        out += values
+        return out
+
+    def _assemble(self, spherical_values: list, driving: np.ndarray | None, other) -> np.ndarray:
+        out = np.empty(self.n_rows)
+        if self._sph_slice is not None:
+            out[self._sph_slice] = spherical_values
+        elif self._spherical:
+            out[self._rows] = spherical_values
+        for rows in self._others:
+            other(self.model, self.data, rows, out)
+        if driving is not None:
+            out[self.n_closure_rows :] = driving
+        return out
+
+
+def _closure_residual(model: pin.Model, data: pin.Data, rows: ClosureRows, out: np.ndarray) -> None:
+    """Rows of one closure in Phi (reference equations of :func:`residual`)."""
+    a, b, r = rows.closure.frame_a, rows.closure.frame_b, rows.row
+    out[r : r + 3] = data.oMf[a].translation - data.oMf[b].translation
+    if rows.closure.kind == "revolute":
+        z_a = data.oMf[a].rotation[:, 2]
+        rotation_b = _frame_b_rotation(data, rows)
+        out[r + 3] = z_a @ rotation_b[:, 0]
+        out[r + 4] = z_a @ rotation_b[:, 1]
+
+
+def _closure_jacobian(model: pin.Model, data: pin.Data, rows: ClosureRows, out: np.ndarray) -> None:
+    """Rows of one closure in Phi_q (reference equations of :func:`jacobian`)."""
+    a, b, r = rows.closure.frame_a, rows.closure.frame_b, rows.row
+    jac_a = pin.getFrameJacobian(model, data, a, LWA)
+    jac_b = pin.getFrameJacobian(model, data, b, LWA)
+    out[r : r + 3] = jac_a[:3] - jac_b[:3]
+    if rows.closure.kind == "revolute":
+        z_a = data.oMf[a].rotation[:, 2]
+        rotation_b = _frame_b_rotation(data, rows)
+        relative = jac_a[3:] - jac_b[3:]
+        out[r + 3] = np.cross(z_a, rotation_b[:, 0]) @ relative
+        out[r + 4] = np.cross(z_a, rotation_b[:, 1]) @ relative
+
+
+def _closure_gamma(model: pin.Model, data: pin.Data, rows: ClosureRows, out: np.ndarray) -> None:
+    """Rows of one closure in gamma (reference equations of :func:`gamma`)."""
+    a, b, r = rows.closure.frame_a, rows.closure.frame_b, rows.row
+    acc_a = pin.getFrameClassicalAcceleration(model, data, a, LWA)
+    acc_b = pin.getFrameClassicalAcceleration(model, data, b, LWA)
+    out[r : r + 3] = -(acc_a.linear - acc_b.linear)
+    if rows.closure.kind == "revolute":
+        vel_a = pin.getFrameVelocity(model, data, a, LWA).angular
+        vel_b = pin.getFrameVelocity(model, data, b, LWA).angular
+        z_a = data.oMf[a].rotation[:, 2]
+        rotation_b = _frame_b_rotation(data, rows)
+        d_omega = vel_a - vel_b
+        d_alpha = acc_a.angular - acc_b.angular
+        z_a_dot = np.cross(vel_a, z_a)
+        for k in (0, 1):
+            axis_b = rotation_b[:, k]
+            axis_b_dot = np.cross(vel_b, axis_b)
+            cross = np.cross(z_a, axis_b)
+            cross_dot = np.cross(z_a_dot, axis_b) + np.cross(z_a, axis_b_dot)
+            out[r + 3 + k] = -(d_alpha @ cross + d_omega @ cross_dot)

@@ -30,10 +30,13 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
-from typing import Protocol, Sequence
+import weakref
+from typing import Callable, Protocol, Sequence
 
 import numpy as np
 import pinocchio as pin
+
+from clearance_contact import SphericalClearanceJoint
 
 from . import constraints as C
 from .mechanism import ClearanceSite, Mechanism
@@ -127,19 +130,23 @@ def make_dynamics_model(
             raise ValueError(f"clearance site {site.name!r} is {site.kind} but its law has {law.n_candidates} candidates")
         contacts.append(ContactSite(site, law, offset))
         offset += law.n_candidates
-    ee = mechanism.model.getFrameId(end_effector_frame) if end_effector_frame else len(mechanism.model.frames) - 1
+    ee = mechanism.frame_id(end_effector_frame or "platform")
     return DynamicsModel(mechanism, C.constraint_set(mechanism, driven=True), tuple(contacts), drive, baumgarte, ee)
 
 
 @dataclass
 class DynamicsWorkspace:
-    """Per-run mutable state: Pinocchio data and counters."""
+    """Per-run mutable state: Pinocchio data, counters and the hot path's prebound views."""
 
     data: pin.Data
     rhs_calls: int = 0
     rejected_stages: int = 0  # trial stages in an absurd pose (see robot.simulation)
     simple_q: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=int))
     simple_v: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=int))
+    kernel: C.ConstraintKernel | None = None  # Phi, Phi_q, gamma on ``data`` (views bound once)
+    sites: tuple = ()  # per contact site: _SiteViews on ``data``
+    drive: Callable | None = None  # the drive through its interpolation table (see DriveTable)
+    zero_tau: np.ndarray = field(default_factory=lambda: np.zeros(0))
 
 
 def make_workspace(dynamics: DynamicsModel) -> DynamicsWorkspace:
@@ -149,7 +156,104 @@ def make_workspace(dynamics: DynamicsModel) -> DynamicsWorkspace:
         if model.nqs[j] == model.nvs[j]:
             simple_q.extend(range(model.idx_qs[j], model.idx_qs[j] + model.nqs[j]))
             simple_v.extend(range(model.idx_vs[j], model.idx_vs[j] + model.nvs[j]))
-    return DynamicsWorkspace(model.createData(), simple_q=np.array(simple_q, dtype=int), simple_v=np.array(simple_v, dtype=int))
+    data = model.createData()
+    return DynamicsWorkspace(
+        data,
+        simple_q=np.array(simple_q, dtype=int),
+        simple_v=np.array(simple_v, dtype=int),
+        kernel=C.ConstraintKernel(dynamics.constraints, data),
+        sites=tuple(_SiteViews(contact, data) for contact in dynamics.contacts),
+        drive=drive_table(dynamics.drive),
+        zero_tau=np.zeros(model.nv),
+    )
+
+
+class DriveTable:
+    """A drive's ``(s, sd, sdd)(t)`` through piecewise polynomials, verified against the drive.
+
+    The exact drive of a platform trajectory (inverse kinematics, ~200 us a call)
+    costs more than the rest of the right-hand side, so the integrator reads it
+    from a table: on each segment of width ``width`` (built on first use) every
+    output is interpolated at ``degree + 1`` Chebyshev nodes, and the polynomial
+    is checked against the exact drive at ``checks`` points between the nodes; a
+    segment whose check misses ``rtol`` (relative to the largest value of that
+    output over the segment, for s, sd and sdd separately) is evaluated exactly
+    instead. For the shipped smooth trajectories the table agrees with the drive
+    to ~1e-15 relative (``tests/test_integrators.py``), far below any
+    integration tolerance. ``exact_segments`` counts the fallbacks.
+    """
+
+    def __init__(self, drive: Drive, width: float = 1.0 / 32.0, degree: int = 11, rtol: float = 1e-12, checks: int = 3):
+        try:  # a weak reference: the shared tables (drive_table) must not keep their drive alive
+            self._drive = weakref.ref(drive)
+        except TypeError:
+            self._drive = lambda: drive
+        self.width = float(width)
+        self.degree = int(degree)
+        self.rtol = float(rtol)
+        self.powers = np.arange(self.degree + 1, dtype=float)
+        n = self.degree + 1
+        self.nodes = np.cos(np.pi * (np.arange(n) + 0.5) / n)[::-1]
+        self.check_points = np.linspace(-1.0, 1.0, checks + 2)[1:-1] + 0.5 / (checks + 1)
+        self.segments: dict[int, tuple[float, np.ndarray | None, int]] = {}
+        self.exact_segments = 0
+        self._to_unit = 2.0 / self.width
+        self._low = self._high = math.nan  # the previous call's segment [low, high)
+        self._last = None
+
+    def _build(self, k: int):
+        half = 0.5 * self.width
+        middle = (k + 0.5) * self.width
+        drive = self.drive
+        samples = np.array([np.concatenate(drive.drive(middle + half * x)) for x in self.nodes])
+        m = samples.shape[1] // 3
+        coefficients = np.linalg.solve(np.vander(self.nodes, self.degree + 1, increasing=True), samples)
+        scale = np.abs(samples).reshape(len(self.nodes), 3, m).max(axis=(0, 2))
+        ok = True
+        for x in self.check_points:
+            exact = np.concatenate(drive.drive(middle + half * x))
+            error = np.abs((x ** self.powers) @ coefficients - exact).reshape(3, m).max(axis=1)
+            if not np.all(error <= self.rtol * np.maximum(scale, 1e-300)):
+                ok = False
+                break
+        if not ok:
+            self.exact_segments += 1
+        segment = (middle, coefficients if ok else None, m)
+        self.segments[k] = segment
+        return segment
+
+    @property
+    def drive(self) -> Drive:
+        return self._drive()
+
+    def __call__(self, t: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        if not self._low <= t < self._high:  # not the segment of the previous call
+            k = math.floor(t / self.width)
+            segment = self.segments.get(k)
+            if segment is None:
+                segment = self._build(k)
+            self._last = segment
+            self._low, self._high = k * self.width, (k + 1) * self.width
+        middle, coefficients, m = self._last
+        if coefficients is None:
+            return self.drive.drive(t)
+        values = ((t - middle) * self._to_unit) ** self.powers @ coefficients
+        return values[:m], values[m : 2 * m], values[2 * m :]
+
+
+_DRIVE_TABLES: "weakref.WeakKeyDictionary[object, DriveTable]" = weakref.WeakKeyDictionary()
+
+
+def drive_table(drive: Drive) -> DriveTable:
+    """The :class:`DriveTable` of ``drive``, shared by every workspace of the same drive object."""
+    try:
+        table = _DRIVE_TABLES.get(drive)
+    except TypeError:  # not weak-referenceable or not hashable: a private table
+        return DriveTable(drive)
+    if table is None:
+        table = DriveTable(drive)
+        _DRIVE_TABLES[drive] = table
+    return table
 
 
 def normalise_quaternions(mechanism: Mechanism, q: np.ndarray) -> np.ndarray:
@@ -165,19 +269,10 @@ def configuration_rate(dynamics: DynamicsModel, workspace: DynamicsWorkspace, q:
     """dq/dt from the generalized velocity v (free-flyer: local twist to position and quaternion rates).
 
     Free-flyer (Pinocchio): position rate ``R v_lin``; quaternion ``(x, y, z, w)``
-    rate ``0.5 q (x) (omega, 0)`` with ``omega`` in the body frame.
+    rate ``0.5 q (x) (omega, 0)`` with ``omega`` in the body frame. Computed by
+    Pinocchio's tangent map (``tangentMapProduct``); ``q`` must have unit quaternions.
     """
-    qdot = np.empty(dynamics.nq)
-    qdot[workspace.simple_q] = v[workspace.simple_v]
-    for iq, iv in dynamics.mechanism.free_flyers:
-        x, y, z, w = q[iq + 3 : iq + 7]
-        vec = np.array([x, y, z])
-        omega = v[iv + 3 : iv + 6]
-        rotation = pin.Quaternion(w, x, y, z).toRotationMatrix()
-        qdot[iq : iq + 3] = rotation @ v[iv : iv + 3]
-        qdot[iq + 3 : iq + 6] = 0.5 * (w * omega + np.cross(vec, omega))
-        qdot[iq + 6] = -0.5 * (vec @ omega)
-    return qdot
+    return np.reshape(pin.tangentMapProduct(dynamics.mechanism.model, q, np.reshape(v, (-1, 1))), -1)
 
 
 @dataclass
@@ -211,30 +306,141 @@ def evaluate(
     v: np.ndarray,
     onset_rates: np.ndarray,
 ) -> Evaluation:
-    """Solve the stabilised KKT system (paper eq. (24)) at (t, q, v)."""
-    mechanism = dynamics.mechanism
-    model, data = mechanism.model, workspace.data
-    constraints = dynamics.constraints
+    """Solve the stabilised KKT system (paper eq. (24)) at (t, q, v).
+
+    Evaluates every contact law (the full contact state is returned); the
+    integrator's right-hand side uses :func:`state_derivative` instead.
+    """
+    model, data = dynamics.mechanism.model, workspace.data
+    kernel = workspace.kernel
     workspace.rhs_calls += 1
     s, sd, sdd = dynamics.drive.drive(t)
     pin.computeAllTerms(model, data, q, v)
     pin.updateFramePlacements(model, data)
-    phi = C.residual(constraints, data, q, s)
-    phi_q = C.jacobian(constraints, model, data)
-    phi_dot = phi_q @ v - C.velocity_rhs(constraints, sd)
+    phi, gam = kernel.update(q, s, sdd)
+    phi_q = kernel.phi_q
+    phi_dot = phi_q @ v
+    if kernel.driven:
+        phi_dot[kernel.n_closure_rows :] -= sd
     gains = dynamics.baumgarte
-    rhs = C.gamma(constraints, model, data, sdd) - 2.0 * gains.alpha * phi_dot - gains.beta**2 * phi
+    rhs = gam - 2.0 * gains.alpha * phi_dot - gains.beta**2 * phi
     tau = np.zeros(model.nv)
     contacts = []
-    for contact in dynamics.contacts:
-        site = contact.site
-        result = contact.law.evaluate(*element_states(data, model, site), onset_rates[contact.candidates])
+    for contact, views in zip(dynamics.contacts, workspace.sites):
+        result = contact.law.evaluate(*views.states(model, data), onset_rates[contact.candidates])
         contacts.append(result)
         if np.any(result.in_contact):
-            tau += pin.getFrameJacobian(model, data, site.outer_frame, LWA).T @ result.wrench_outer
-            tau += pin.getFrameJacobian(model, data, site.inner_frame, LWA).T @ result.wrench_inner
+            views.add_generalized_force(model, data, result, tau)
     qdd = pin.forwardDynamics(model, data, tau, phi_q, -rhs).copy()
     return Evaluation(qdd, -data.lambda_c.copy(), phi, phi_dot, contacts, tau)
+
+
+def state_derivative(
+    dynamics: DynamicsModel,
+    workspace: DynamicsWorkspace,
+    t: float,
+    y: np.ndarray,
+    onset_rates: np.ndarray,
+) -> np.ndarray:
+    """dy/dt of the simulation state ``y = [q, v, W_act, W_contact]`` (the integrator's right-hand side).
+
+    The same equations as :func:`evaluate` (plus :func:`configuration_rate` and the
+    actuator and contact powers), on the hot path: quaternions normalised in a
+    copy of q, the drive through its interpolation table (:class:`DriveTable`),
+    the constraint kernel's prebound views, and a contact law evaluated only
+    when its cheap ``penetration()`` shows contact (out of contact its wrench
+    is zero). Raises ``ContactError`` as :func:`evaluate` does.
+    """
+    mechanism = dynamics.mechanism
+    model, data = mechanism.model, workspace.data
+    kernel = workspace.kernel
+    nq, nv = model.nq, model.nv
+    workspace.rhs_calls += 1
+    q = pin.normalize(model, y[:nq])  # a copy with unit quaternions
+    v = y[nq : nq + nv]
+    s, sd, sdd = workspace.drive(t)
+    pin.computeAllTerms(model, data, q, v)
+    pin.updateFramePlacements(model, data)
+    gains = dynamics.baumgarte
+    # Pinocchio's drift is minus the stabilised right-hand side
+    drift = kernel.stabilised_drift(q, v, s, sd, sdd, 2.0 * gains.alpha, gains.beta * gains.beta)
+    tau = None
+    for contact, views in zip(dynamics.contacts, workspace.sites):
+        # a site in contact at the previous call is evaluated directly; otherwise its cheap
+        # penetration() decides whether the law is needed at all
+        if views.touching or views.maybe_in_contact():
+            result = contact.law.evaluate(*views.states(model, data), onset_rates[contact.candidates])
+            views.touching = not max(result.penetration.tolist()) <= 0.0
+            if views.touching:
+                if tau is None:
+                    tau = np.zeros(nv)
+                views.add_generalized_force(model, data, result, tau)
+    out = np.empty(nq + nv + 2)
+    out[nq : nq + nv] = pin.forwardDynamics(model, data, workspace.zero_tau if tau is None else tau, kernel.phi_q, drift)
+    out[:nq] = pin.tangentMapProduct(model, q, v[:, None])
+    # actuator power: driving force (= Pinocchio's multiplier of the driving row) times the actuator rate
+    out[nq + nv] = data.lambda_c[kernel.n_closure_rows :] @ v[mechanism.actuator_v_index] if kernel.driven else 0.0
+    out[nq + nv + 1] = 0.0 if tau is None else tau @ v
+    return out
+
+
+def contact_probe(dynamics: DynamicsModel, workspace: DynamicsWorkspace, t: float, q: np.ndarray, v: np.ndarray, onset_rates: np.ndarray):
+    """Penetration and penetration rate of every candidate, and max |Phi|, at (t, q, v).
+
+    Kinematics only (``forwardKinematics(q, v)``): what the simulation checks after
+    every step (events, failures). ``q`` must have unit quaternions.
+    """
+    model, data = dynamics.mechanism.model, workspace.data
+    pin.forwardKinematics(model, data, q, v)
+    pin.updateFramePlacements(model, data)
+    residual = workspace.kernel.residual(q, workspace.drive(t)[0])
+    n = dynamics.n_candidates
+    pen = np.empty(n)
+    rate = np.empty(n)
+    for contact, views in zip(dynamics.contacts, workspace.sites):
+        result = contact.law.evaluate(*views.states(model, data), onset_rates[contact.candidates])
+        pen[contact.candidates] = result.penetration
+        rate[contact.candidates] = result.penetration_rate
+    return pen, rate, (float(np.max(np.abs(residual))) if residual.size else 0.0)
+
+
+class _SiteViews:
+    """A contact site's element frames on one ``pin.Data``: rotation and translation views bound once."""
+
+    def __init__(self, contact: ContactSite, data: pin.Data):
+        site = contact.site
+        self.law = contact.law
+        self.outer_frame, self.inner_frame = site.outer_frame, site.inner_frame
+        outer, inner = data.oMf[site.outer_frame], data.oMf[site.inner_frame]
+        self.outer_rotation, self.outer_position = outer.rotation, outer.translation
+        self.inner_rotation, self.inner_position = inner.rotation, inner.translation
+        # the spherical law's penetration is |b - s| - c: inline it (exactly the law's formula)
+        self.sphere_clearance = contact.law.clearance if type(contact.law) is SphericalClearanceJoint else None
+        self.touching = False  # in contact at the previous right-hand side (a hint, never a shortcut to a force)
+
+    def states(self, model: pin.Model, data: pin.Data):
+        """Arguments of ``law.evaluate`` but the onset rates (as :func:`element_states`)."""
+        return (
+            self.outer_rotation,
+            self.outer_position,
+            pin.getFrameVelocity(model, data, self.outer_frame, LWA).vector,
+            self.inner_rotation,
+            self.inner_position,
+            pin.getFrameVelocity(model, data, self.inner_frame, LWA).vector,
+        )
+
+    def maybe_in_contact(self) -> bool:
+        """False only if every candidate's penetration is <= 0 (a NaN pose answers True)."""
+        if self.sphere_clearance is not None:
+            depth = math.dist(self.inner_position.tolist(), self.outer_position.tolist()) - self.sphere_clearance
+            return not depth <= 0.0
+        depth = max(self.law.penetration(self.outer_rotation, self.outer_position, self.inner_rotation, self.inner_position).tolist())
+        return not depth <= 0.0
+
+    def add_generalized_force(self, model: pin.Model, data: pin.Data, result, tau: np.ndarray) -> None:
+        """tau += J_outer^T w_outer + J_inner^T w_inner (LOCAL_WORLD_ALIGNED frame Jacobians)."""
+        tau += pin.getFrameJacobian(model, data, self.outer_frame, LWA).T @ result.wrench_outer
+        tau += pin.getFrameJacobian(model, data, self.inner_frame, LWA).T @ result.wrench_inner
 
 
 def penetrations(dynamics: DynamicsModel, workspace: DynamicsWorkspace, q: np.ndarray) -> np.ndarray:

@@ -116,9 +116,13 @@ class Mechanism:
         raise KeyError(f"no clearance site {name!r}; sites: {self.clearance_names}")
 
     def frame_id(self, name: str) -> int:
-        if not self.model.existFrame(name):
+        """Id of the frame ``name``; a link's BODY frame wins over a joint frame of the same name."""
+        if self.model.existFrame(name, pin.FrameType.BODY):
+            return self.model.getFrameId(name, pin.FrameType.BODY)
+        matches = [i for i, frame in enumerate(self.model.frames) if frame.name == name]
+        if not matches:
             raise KeyError(f"frame {name!r} is not in the model")
-        return self.model.getFrameId(name)
+        return matches[0]
 
     def total_mass(self) -> float:
         return float(sum(inertia.mass for inertia in self.model.inertias))

@@ -9,8 +9,10 @@ control as the motion, so the energy balance
 time and, after each step:
 
 1. checks for failure (non-finite accepted state, penetration beyond its physical bound,
-   constraint drift beyond tolerance, step-size collapse) and stops with the
-   time and the cause, keeping every step already computed;
+   unphysical pose (e.g. a journal turned half round), constraint drift beyond
+   tolerance, step-size collapse, Newton divergence of an implicit fixed-step
+   method, event chattering, wall time) and stops with the time and the cause,
+   keeping every step already computed;
 2. scans the contact candidates for **onset** (penetration crossing zero
    upward). The earliest onset in the step is located on the step's dense output
    (Brent's method), the step is cut there and the solver restarted, after
@@ -40,9 +42,8 @@ from scipy.optimize import brentq
 
 from clearance_contact import ONSET_RATE_FLOOR, ContactError
 
-from . import constraints as C
 from . import dynamics as D
-from .integrators import FIXED_STEP_METHODS, STAGES, make_solver
+from .integrators import FIXED_STEP_METHODS, STAGES, SecondOrderStructure, make_solver
 
 SUCCESS, FAILED = 0, -1
 #: restarts at one instant before the run is declared failed (contact events that make no progress)
@@ -51,13 +52,23 @@ MAX_STALLED_RESTARTS = 20
 
 @dataclass(frozen=True)
 class SolverOptions:
-    """Integrator choice and tolerances (``first_step`` is the step of fixed-step methods)."""
+    """Integrator choice and tolerances (``first_step`` is the step of fixed-step methods).
+
+    ``hidden_contacts``: scan each step's dense output for contacts that start and
+    end inside the step (the guard against steps that jump over a whole impact);
+    on by default, off only to study what it guards against
+    (``scripts/work_precision.py``). ``output_step``: also record the state at every
+    multiple of it, from the steps' dense output (record kind 4), so that runs can
+    be compared at common times.
+    """
 
     method: str = "RK45"
     rtol: float = 1e-7
     atol: float = 1e-9
     max_step: float = 1e-3
     first_step: float | None = None
+    hidden_contacts: bool = True
+    output_step: float | None = None
 
 
 @dataclass(frozen=True)
@@ -87,7 +98,7 @@ class Trajectory:
     t: np.ndarray
     y: np.ndarray  # (n, nq + nv + 2): q, v, actuator work, contact work
     onset_rates: np.ndarray  # (n, n_candidates): contact state used at each record
-    kind: np.ndarray  # (n,) 0 step, 1 contact onset, 2 penetration maximum, 3 start
+    kind: np.ndarray  # (n,) 0 step, 1 contact onset, 2 penetration maximum, 3 start, 4 output grid
     n_steps: int = 0
     n_rejected: int = 0
     n_rhs: int = 0
@@ -96,6 +107,8 @@ class Trajectory:
     cpu_time: float = 0.0
     wall_time: float = 0.0
     events: list = field(default_factory=list)  # (t, candidate, kind, value)
+    n_hidden_contacts: int = 0  # onsets found inside a step whose ends are both out of contact
+    max_onset_overshoot: float = 0.0  # deepest penetration (m) at the end of a step cut back to a contact onset
 
     @property
     def success(self) -> bool:
@@ -108,7 +121,7 @@ class _Failure(Exception):
         self.cause = cause
 
 
-RECORD_STEP, RECORD_ONSET, RECORD_PEAK, RECORD_START = 0, 1, 2, 3
+RECORD_STEP, RECORD_ONSET, RECORD_PEAK, RECORD_START, RECORD_OUTPUT = 0, 1, 2, 3, 4
 
 
 def initial_onset_rates(dynamics: D.DynamicsModel) -> np.ndarray:
@@ -127,13 +140,15 @@ def integrate(
     mechanism = dynamics.mechanism
     nq, nv = dynamics.nq, dynamics.nv
     workspace = D.make_workspace(dynamics)
-    probe_data = mechanism.model.createData()
+    probe_workspace = D.make_workspace(dynamics)
     onset = initial_onset_rates(dynamics)
     bounds = _penetration_bounds(dynamics, limits)
     t0, t_final = map(float, t_span)
     records_t, records_y, records_onset, records_kind = [], [], [], []
     events: list = []
-    counts = dict(steps=0, rejected=0, rhs_start=0, restarts=0)
+    counts = dict(steps=0, rejected=0, rhs_start=0, restarts=0, hidden=0)
+    overshoot = [0.0]
+    structure = SecondOrderStructure(nq, nv, lambda q, dq: pin.integrate(mechanism.model, q, dq))
 
     def record(t: float, y: np.ndarray, kind: int) -> None:
         records_t.append(t)
@@ -141,43 +156,40 @@ def integrate(
         records_onset.append(onset.copy())
         records_kind.append(kind)
 
-    actuated = mechanism.actuator_v_index
+    output_step = options.output_step
+    next_output = [1]  # index k of the next output time k * output_step
+
+    def record_outputs(dense, t_from: float, t_to: float) -> None:
+        """Record the output grid times in (t_from, t_to] from the step's dense output."""
+        if output_step is None:
+            return
+        while next_output[0] * output_step <= t_to + 1e-12 * output_step:
+            t_out = min(next_output[0] * output_step, t_to)
+            if t_out > t_from:
+                record(t_out, _normalised_state(mechanism, dense(t_out), nq), RECORD_OUTPUT)
+            next_output[0] += 1
+
 
     def rhs(t: float, y: np.ndarray) -> np.ndarray:
-        q = D.normalise_quaternions(mechanism, y[:nq])
-        v = y[nq : nq + nv]
-        out = np.empty(nq + nv + 2)
         try:
-            evaluation = D.evaluate(dynamics, workspace, t, q, v, onset)
+            return D.state_derivative(dynamics, workspace, t, y, onset)
         except ContactError:
             # a trial stage of a too-large step can land in an absurd pose (e.g. a journal
             # turned half round): answer with a non-finite derivative, which makes the
             # step's error estimate non-finite, so the solver rejects the step and
             # shrinks it. Accepted states are still checked and a real blow-up is reported.
-            out.fill(np.inf)
             workspace.rejected_stages += 1
-            return out
-        out[:nq] = D.configuration_rate(dynamics, workspace, q, v)
-        out[nq : nq + nv] = evaluation.qdd
-        out[nq + nv] = evaluation.driving_force(dynamics.constraints) @ v[actuated]
-        out[nq + nv + 1] = evaluation.generalized_contact_force @ v
-        return out
+            return np.full(nq + nv + 2, np.inf)
 
     def probe(t: float, y: np.ndarray) -> tuple[np.ndarray, np.ndarray, float]:
         """Penetration and its rate per candidate, and the constraint residual, at (t, y)."""
         q = D.normalise_quaternions(mechanism, y[:nq])
-        model = mechanism.model
-        pin.forwardKinematics(model, probe_data, q, y[nq : nq + nv])
-        pin.updateFramePlacements(model, probe_data)
-        s, _, _ = dynamics.drive.drive(t)
-        residual = C.residual(dynamics.constraints, probe_data, q, s)
-        pen = np.empty(dynamics.n_candidates)
-        rate = np.empty(dynamics.n_candidates)
-        for contact in dynamics.contacts:
-            result = contact.law.evaluate(*D.element_states(probe_data, model, contact.site), onset[contact.candidates])
-            pen[contact.candidates] = result.penetration
-            rate[contact.candidates] = result.penetration_rate
-        return pen, rate, float(np.max(np.abs(residual))) if residual.size else 0.0
+        try:
+            return D.contact_probe(dynamics, probe_workspace, t, q, y[nq : nq + nv], onset)
+        except ContactError as exc:
+            # an accepted state (a fixed-step method accepts every step) in an absurd pose,
+            # e.g. a journal turned half round in its bearing: the run has blown up
+            raise _Failure("unphysical pose", f"t={t:.9g} s: {exc}") from None
 
     started_cpu, started_wall = time.process_time(), time.perf_counter()
     y0 = np.asarray(y0, dtype=float)
@@ -188,7 +200,10 @@ def integrate(
     t, y = t0, _normalised_state(mechanism, y0, nq)
     status, cause, message = SUCCESS, None, "the integration reached the end of the time span"
     record(t, y, RECORD_START)
-    pen_old, rate_old, _ = probe(t, y)
+    try:
+        pen_old, rate_old, _ = probe(t, y)
+    except _Failure as failure:
+        raise ValueError(f"the initial state is not a valid pose ({failure})") from None
     for k in np.flatnonzero(pen_old > 0):  # already in contact at the start
         onset[k] = max(rate_old[k], ONSET_RATE_FLOOR)
     first_step = options.first_step
@@ -207,17 +222,18 @@ def integrate(
         while t < t_final:
             workspace.rhs_calls = 0
             dense_calls[0] = 0
-            solver = make_solver(options.method, rhs, t, y, t_final, options.rtol, options.atol, options.max_step, first_step)
+            solver = make_solver(options.method, rhs, t, y, t_final, options.rtol, options.atol, options.max_step, first_step, structure)
             start_calls = workspace.rhs_calls
             accepted_here = 0
             restarted = False
             while solver.status == "running":
                 step_message = solver.step()
                 if solver.status == "failed":
-                    raise _Failure("step size collapse", f"t={solver.t:.9g} s: {step_message}")
+                    raise _Failure(getattr(solver, "failure_cause", None) or "step size collapse", f"t={solver.t:.9g} s: {step_message}")
                 t_old = solver.t_old
                 t_new, y_new = solver.t, solver.y
                 accepted_here += 1
+                counts["steps"] += 1
                 if options.method not in FIXED_STEP_METHODS and solver.step_size is not None and solver.step_size < limits.min_step and t_new < t_final:
                     raise _Failure("step size collapse", f"t={t_new:.9g} s: step size {solver.step_size:.3e} s below {limits.min_step:.1e} s")
                 if not np.all(np.isfinite(y_new)):
@@ -226,7 +242,10 @@ def integrate(
                 dense = None
                 # --- contact onset (terminal) ---
                 crossing = np.flatnonzero((pen_old <= 0) & (pen_new > 0))
-                hidden = np.flatnonzero((pen_old <= 0) & (pen_new <= 0) & (rate_old > 0) & (rate_new < 0))
+                if options.hidden_contacts:
+                    hidden = np.flatnonzero((pen_old <= 0) & (pen_new <= 0) & (rate_old > 0) & (rate_new < 0))
+                else:
+                    hidden = crossing[:0]
                 candidates_t = []
                 if crossing.size or hidden.size:
                     dense = dense_output(solver)
@@ -236,6 +255,9 @@ def integrate(
                         found = _hidden_contact(dense, probe, k, t_old, t_new)
                         if found is not None:
                             candidates_t.append((found, k))
+                            counts["hidden"] += 1
+                    if crossing.size:
+                        overshoot[0] = max(overshoot[0], float(np.max(pen_new[crossing])))
                 if candidates_t:
                     t_event = min(candidates_t)[0]
                     y_event = _normalised_state(mechanism, dense(t_event), nq)
@@ -247,6 +269,7 @@ def integrate(
                     for k in starting:
                         onset[k] = max(rate_e[k], ONSET_RATE_FLOOR)
                         events.append((t_event, int(k), "onset", float(onset[k])))
+                    record_outputs(dense, t_old, t_event)
                     record(t_event, y_event, RECORD_ONSET)
                     if t_event <= t:
                         stalled += 1
@@ -281,17 +304,20 @@ def integrate(
                 if np.any((pen_new > 0) & (rate_old > 0) & (rate_new <= 0)):
                     dense = dense or dense_output(solver)
                     _record_peaks(dense, probe, pen_old, rate_old, t_old, t_new, record, events, mechanism, nq, rate_new)
+                if output_step is not None and next_output[0] * output_step <= t_new + 1e-12 * output_step:
+                    record_outputs(dense or dense_output(solver), t_old, t_new)
                 record(t_new, y_new, RECORD_STEP)
                 t, y = t_new, y_new
                 pen_old, rate_old = pen_new, rate_new
                 if progress is not None:
                     progress(t)
-            counts["steps"] += accepted_here
             n_rhs_total += workspace.rhs_calls
             stages = STAGES.get(options.method)
             if stages is not None:
                 attempts = (workspace.rhs_calls - start_calls - dense_calls[0]) / stages
                 counts["rejected"] += max(0, int(round(attempts)) - accepted_here)
+            elif getattr(solver, "n_rejected", None) is not None and counts["rejected"] >= 0:
+                counts["rejected"] += solver.n_rejected
             else:
                 counts["rejected"] = -1
             if restarted:
@@ -326,6 +352,8 @@ def integrate(
         cpu_time=time.process_time() - started_cpu,
         wall_time=time.perf_counter() - started_wall,
         events=events,
+        n_hidden_contacts=counts["hidden"],
+        max_onset_overshoot=overshoot[0],
     )
 
 

@@ -1,0 +1,425 @@
+"""The mechanism in Exudyn: an independent engine (the role ADAMS plays in the seed paper).
+
+Exudyn (https://github.com/jgerstmayr/EXUDYN, C++ with a Python interface) is a
+redundant-coordinate multibody code: Lagrange multipliers, index-3 constraints,
+implicit generalized-alpha integration. Only the geometry input
+(:mod:`.bodies`), the initial state (the Lagrange run's ``y0`` mapped to
+absolute coordinates, :func:`.newton_euler.initial_state`), the prescribed
+actuator lengths (``robot.trajectory``) and the contact law
+(``clearance_contact``) are shared; Exudyn builds and solves its own equations.
+
+Model
+-----
+* Every moving link is an ``ObjectRigidBody`` on a ``NodeRigidBodyEP`` (Euler
+  parameters) placed at its centre of mass, link axes as body axes; gravity is a
+  ``LoadMassProportional`` (-9.81 m/s^2 along z).
+* Revolute joints (``U*_x``, ``U*_y``, ``R1``): ``GenericJoint`` with marker
+  frames whose z is the joint axis, ``constrainedAxes = [1,1,1,1,1,0]``.
+  Spherical closures ``S*``: ``SphericalJoint``.
+* Prismatic joints: ``GenericJoint`` with the translation along the axis free,
+  ``constrainedAxes = [1,1,0,1,1,1]``, plus the **actuator** as an
+  ``ObjectConnectorDistance`` between the cylinder's hinge point and the piston's
+  hinge point (both on the leg axis, so their distance is the prescribed length
+  ``s_k``); the distance is set to ``s_k(t_{n+1})`` in a pre-step user function
+  (Exudyn passes the end time of the step) and enforced at position level
+  (index 3) at the end of the step. The driving force is the connector's
+  constraint force, ``driving = -Force`` (Exudyn reports the force on the
+  first marker as positive in tension).
+  Why not a ``GenericJoint`` with all six axes locked and an ``offsetUserFunction``
+  along z (the documented way to prescribe a joint motion): with the two marker
+  points 1.2 m apart the locked translational equations lose rank in Exudyn
+  1.13.6 (``ComputeSystemDegreeOfFreedom`` reports 3 redundant constraints for one
+  U-P-S leg closed on a fixed platform instead of 1, and Newton diverges at the
+  first step); with coincident markers it works, but the piston slides along
+  the cylinder, so the markers cannot stay coincident.
+* Clearance joints impose no joint; each is an ``ObjectGenericODE2`` on the
+  nodes of the two bodies with a ``forceUserFunction`` that rebuilds the element
+  frames from the node coordinates, calls the same ``clearance_contact`` law and
+  returns the generalized forces: for a wrench ``[f, m]`` about an element origin
+  at ``s = A s'`` from the COM, ``Q_pos = f`` and ``Q_ep = G^T (m + s x f)``, with
+  ``omega = G ep_dot`` (``EulerParameters2G``). Its Jacobian is computed by
+  Exudyn's numerical differentiation.
+* Lankarani-Nikravesh onset rates: Exudyn has no event location, so after each
+  converged step every candidate out of contact stores its current penetration
+  rate (floored); once a step ends in contact the value stays until separation.
+  The onset rate used by an impact is thus the approach rate at the start of the
+  step that enters contact (error ``O(h a)``, ``a`` the relative acceleration
+  before the impact).
+
+Initial conditions
+------------------
+Positions and velocities from the Lagrange run's ``y0``; initial accelerations
+from the kinematic acceleration analysis of the mechanism with its clearance
+joints centred (the ideal mechanism, ``robot.kinematics.acceleration_analysis``),
+mapped to COM accelerations and Euler-parameter second derivatives, because
+Exudyn's own ``computeInitialAccelerations`` ignores prescribed constraint
+motion (documented in ``GeneralizedAlphaSettings``) and the generalized-alpha
+start then carries an error of the size of ``M s''``. For the ideal mechanism
+these are the exact accelerations; with clearance joints the detached bodies
+start with the accelerations of the ideal joint.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+import pinocchio as pin
+from scipy.interpolate import CubicHermiteSpline
+
+from clearance_contact import ONSET_RATE_FLOOR
+
+from .. import constraints as C
+from ..kinematics import acceleration_analysis, assemble, velocity_analysis
+from ..scene import misalignment_rotation
+from ..mechanism import rotation_z_to
+from ..run import Run
+from . import newton_euler as NE
+from .bodies import read_geometry, rpy_matrix
+
+#: spacing (s) of the exact actuator lengths the drive spline goes through
+DRIVE_TABLE_SPACING = 2e-4
+
+
+@dataclass(frozen=True)
+class ExudynSettings:
+    """Generalized-alpha settings (fixed step; Newton on the index-3 system)."""
+
+    step_size: float = 1e-4
+    spectral_radius: float = 0.5
+    newton_relative_tolerance: float = 1e-12
+    newton_absolute_tolerance: float = 1e-14
+    adaptive_step: bool = True  # Exudyn halves the step if Newton fails (no error control)
+    verbose: int = 0  # Exudyn's verboseMode
+
+
+@dataclass
+class ExudynResult:
+    """Outputs of an Exudyn run, one row per time step."""
+
+    success: bool
+    message: str
+    settings: ExudynSettings
+    t: np.ndarray
+    ee_position: np.ndarray
+    driving_force: np.ndarray
+    contact: dict = field(default_factory=dict)  # site -> {"normal_force": (n, k), "penetration": (n, k)}
+    wall_time: float = 0.0  # build + initial accelerations + integration
+    n_steps: int = 0
+    solve_time: float = 0.0  # SolveDynamic only (includes the per-step Python logging)
+
+
+def _qmul(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    return np.concatenate([[a[0] * b[0] - a[1:] @ b[1:]], a[0] * b[1:] + b[0] * a[1:] + np.cross(a[1:], b[1:])])
+
+
+def _cross(a, b) -> np.ndarray:
+    """Cross product of two 3-vectors (much cheaper than ``np.cross`` for single vectors)."""
+    return np.array([a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]])
+
+
+def _ep_matrix(ep: np.ndarray) -> np.ndarray:
+    """Rotation of (not necessarily unit) Euler parameters, Exudyn's formula."""
+    e0, e1, e2, e3 = ep
+    return np.array(
+        [
+            [1 - 2 * (e2 * e2 + e3 * e3), 2 * (e1 * e2 - e0 * e3), 2 * (e1 * e3 + e0 * e2)],
+            [2 * (e1 * e2 + e0 * e3), 1 - 2 * (e1 * e1 + e3 * e3), 2 * (e2 * e3 - e0 * e1)],
+            [2 * (e1 * e3 - e0 * e2), 2 * (e2 * e3 + e0 * e1), 1 - 2 * (e1 * e1 + e2 * e2)],
+        ]
+    )
+
+
+def _ep_G(ep: np.ndarray) -> np.ndarray:
+    """omega (world) = G ep_dot."""
+    e0, e1, e2, e3 = ep
+    return 2.0 * np.array([[-e1, e0, -e3, e2], [-e2, e3, e0, -e1], [-e3, -e2, e1, e0]])
+
+
+def kinematic_accelerations(run: Run, geometry, t: float = 0.0) -> np.ndarray:
+    """COM accelerations and Euler-parameter second derivatives (n, 7) of the ideal mechanism at time t.
+
+    Position, velocity and acceleration analysis (``robot.kinematics``) of the
+    mechanism with its clearance joints replaced by the ideal joints (centred,
+    with the scene's initial misalignment), driven by the prescribed lengths.
+    """
+    mechanism = run.mechanism
+    model = mechanism.model
+    data = model.createData()
+    nq = model.nq
+    misalignment = {joint: misalignment_rotation(angle) for joint, angle in run.scene.misalignment_deg.items()}
+    constraints = C.constraint_set(mechanism, driven=True, centre_clearance=True, misalignment=misalignment)
+    s, sd, sdd = run.dynamics.drive.drive(t)
+    q0 = run.y0[:nq] if t == 0.0 else assemble(constraints, run.y0[:nq], s).q
+    v0 = run.y0[nq : nq + model.nv] if t == 0.0 else velocity_analysis(constraints, q0, sd)
+    a0 = acceleration_analysis(constraints, q0, v0, sdd)
+    pin.forwardKinematics(model, data, q0, v0, a0)
+    pin.updateFramePlacements(model, data)
+    out = np.empty((len(geometry.bodies), 7))
+    lwa = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
+    for k, body in enumerate(geometry.bodies):
+        fid = model.getFrameId(body.name, pin.FrameType.BODY)
+        R = data.oMf[fid].rotation
+        velocity = pin.getFrameVelocity(model, data, fid, lwa)
+        acceleration = pin.getFrameClassicalAcceleration(model, data, fid, lwa)
+        lever = R @ body.com
+        omega, alpha = velocity.angular, acceleration.angular
+        ep = NE.matrix_to_quaternion(R)
+        ep_t = 0.5 * _qmul(np.concatenate([[0.0], omega]), ep)
+        out[k, :3] = acceleration.linear + np.cross(alpha, lever) + np.cross(omega, np.cross(omega, lever))
+        out[k, 3:] = 0.5 * _qmul(np.concatenate([[0.0], alpha]), ep) + 0.5 * _qmul(np.concatenate([[0.0], omega]), ep_t)
+    return out
+
+
+def consistent_accelerations(mbs, settings, kinematic: np.ndarray) -> np.ndarray:
+    """Exudyn's own initial accelerations, with the prescribed actuator accelerations included.
+
+    Solves ``[M C_q^T; C_q 0] [a; lambda] = [f; C_q a_kin]`` with Exudyn's mass
+    matrix ``M``, force vector ``f`` and constraint Jacobian ``C_q`` at the initial
+    state. ``a_kin`` is any acceleration consistent with the constraints (here
+    the ideal mechanism's, from the kinematic analysis); ``C_q a_kin`` is then the
+    acceleration right-hand side including the drivers' ``s''`` that Exudyn's
+    ``computeInitialAccelerations`` leaves out.
+    """
+    import exudyn as exu
+
+    solver = exu.MainSolverImplicitSecondOrder()
+    solver.InitializeSolver(mbs, settings)
+    n2 = solver.GetODE2size()
+    solver.ComputeMassMatrix(mbs)
+    mass = np.array(solver.GetSystemMassMatrix())[:n2, :n2]
+    solver.ComputeODE2RHS(mbs)
+    force = np.array(solver.GetSystemResidual())[:n2]
+    solver.ComputeJacobianODE2RHS(mbs, scalarFactor_ODE2=0.0, scalarFactor_ODE2_t=0.0, scalarFactor_ODE1=0.0)
+    solver.ComputeJacobianAE(mbs, scalarFactor_ODE2=1.0, scalarFactor_ODE2_t=0.0, scalarFactor_ODE1=1.0, velocityLevel=False)
+    jacobian = np.array(solver.GetSystemJacobian())
+    solver.FinalizeSolver(mbs, settings)
+    cq_t = jacobian[:n2, n2:]
+    n_ae = cq_t.shape[1]
+    kkt = np.block([[mass, cq_t], [cq_t.T, np.zeros((n_ae, n_ae))]])
+    rhs = np.concatenate([force, cq_t.T @ kinematic])
+    solution, *_ = np.linalg.lstsq(kkt, rhs, rcond=None)
+    return solution[:n2]
+
+
+def actuator_lengths(drive, t_end: float, spacing: float = DRIVE_TABLE_SPACING):
+    """The prescribed lengths s(t) as a clamped cubic spline through exact values every ``spacing`` seconds.
+
+    Evaluating the platform inverse kinematics at every Exudyn step (1e-5 s) costs
+    more than the rest of the Python side; the spline has the exact values and
+    end slopes, and its error (``spacing^4 max|s^(4)| / 384``, about 2e-14 m for the
+    reference motion) is far below the accuracies compared here.
+    """
+    n = max(2, int(math.ceil(t_end / spacing)) + 1)
+    times = np.linspace(0.0, (n - 1) * spacing, n)
+    values = [drive.drive(float(t)) for t in times]
+    s = np.array([v[0] for v in values])
+    sd = np.array([v[1] for v in values])
+    return CubicHermiteSpline(times, s, sd)
+
+
+class _ContactElement:
+    """State and force function of one clearance joint between two Exudyn nodes (or a node and the ground)."""
+
+    def __init__(self, site: NE.ContactSiteNE, nodes: list, references: dict):
+        self.site = site
+        self.law = site.law
+        self.frames = (site.outer, site.inner)
+        self.bodies = [f.body for f in self.frames if f.body >= 0]
+        self.nodes = [nodes[b] for b in self.bodies]
+        self.reference = np.concatenate([references[b] for b in self.bodies]) if self.bodies else np.zeros(0)
+        self.onset = np.full(self.law.n_candidates, ONSET_RATE_FLOOR)
+
+    def _frame_states(self, q: np.ndarray, q_t: np.ndarray):
+        """(rotation, position, twist, lever, G) of the outer and inner element frames."""
+        states = []
+        for frame in self.frames:
+            if frame.body < 0:
+                states.append((frame.rotation, frame.offset.copy(), np.zeros(6), None, None))
+                continue
+            k = self.bodies.index(frame.body)
+            x = q[7 * k : 7 * k + 7] + self.reference[7 * k : 7 * k + 7]
+            xd = q_t[7 * k : 7 * k + 7]
+            ep = x[3:]
+            A = _ep_matrix(ep)
+            G = _ep_G(ep)
+            omega = G @ xd[3:]
+            lever = A @ frame.offset
+            twist = np.concatenate([xd[:3] + _cross(omega, lever), omega])
+            states.append((A @ frame.rotation, x[:3] + lever, twist, lever, G))
+        return states
+
+    def evaluate(self, q: np.ndarray, q_t: np.ndarray):
+        (Ro, po, two, lo, Go), (Ri, pi_, twi, li, Gi) = self._frame_states(q, q_t)
+        return self.law.evaluate(Ro, po, two, Ri, pi_, twi, self.onset), (lo, Go), (li, Gi)
+
+    def force(self, mbs, t, item, q, q_t):
+        result, outer, inner = self.evaluate(np.asarray(q), np.asarray(q_t))
+        out = np.zeros(7 * len(self.bodies))
+        for frame, (lever, G), wrench in ((self.frames[0], outer, result.wrench_outer), (self.frames[1], inner, result.wrench_inner)):
+            if frame.body < 0:
+                continue
+            k = self.bodies.index(frame.body)
+            out[7 * k : 7 * k + 3] = wrench[:3]
+            out[7 * k + 3 : 7 * k + 7] = G.T @ (wrench[3:] + _cross(lever, wrench[:3]))
+        return out
+
+    def node_state(self, mbs, exu):
+        q, q_t = [], []
+        for node in self.nodes:
+            q.append(np.asarray(mbs.GetNodeOutput(node, exu.OutputVariableType.Coordinates)))
+            q_t.append(np.asarray(mbs.GetNodeOutput(node, exu.OutputVariableType.Coordinates_t)))
+        return (np.concatenate(q), np.concatenate(q_t)) if q else (np.zeros(0), np.zeros(0))
+
+
+def simulate(run: Run, settings: ExudynSettings = ExudynSettings(), t_end: float | None = None) -> ExudynResult:
+    """Build the mechanism of ``run`` in Exudyn and integrate it over ``[0, t_end]``."""
+    import exudyn as exu
+    from exudyn import itemInterface as I
+
+    started = time.perf_counter()
+    t_end = run.scene.duration if t_end is None else t_end
+    ne = NE.build_model(run)  # geometry, element frames and laws only (no equations of motion)
+    geometry = read_geometry(run.mechanism.description)
+    y0 = NE.initial_state(ne, run)
+    r, p, v, w = ne.split(y0)
+    acc0 = kinematic_accelerations(run, geometry)
+    drive = run.dynamics.drive
+    lengths = actuator_lengths(drive, t_end)
+    actuated = list(run.mechanism.description.actuated_joints)
+    clearance = {c.joint for c in run.scene.clearances}
+
+    SC = exu.SystemContainer()
+    mbs = SC.AddSystem()
+    ground = mbs.AddObject(I.ObjectGround())
+    nodes, bodies, references = [], [], {}
+    for k, body in enumerate(geometry.bodies):
+        ep = p[k] / np.linalg.norm(p[k])
+        ep_t = 0.5 * _qmul(ep, np.concatenate([[0.0], w[k]]))
+        reference = np.concatenate([r[k], ep])
+        references[k] = reference
+        node = mbs.AddNode(I.NodeRigidBodyEP(referenceCoordinates=list(reference), initialVelocities=list(v[k]) + list(ep_t)))
+        J = body.inertia
+        obj = mbs.AddObject(
+            I.ObjectRigidBody(mass=body.mass, inertia=[J[0, 0], J[1, 1], J[2, 2], J[1, 2], J[0, 2], J[0, 1]], nodeNumber=node)
+        )
+        mbs.AddLoad(I.LoadMassProportional(markerNumber=mbs.AddMarker(I.MarkerBodyMass(bodyNumber=obj)), loadVector=list(NE.GRAVITY)))
+        nodes.append(node)
+        bodies.append(obj)
+    com = {b.name: b.com for b in geometry.bodies}
+    com[geometry.ground] = np.zeros(3)
+
+    def marker(link: str, xyz, rotation=np.eye(3)):
+        k = geometry.body_index(link)
+        owner = ground if k < 0 else bodies[k]
+        return mbs.AddMarker(
+            I.MarkerBodyRigid(bodyNumber=owner, localHT=exu.HT(rotation=np.asarray(rotation, float), translation=np.asarray(xyz, float) - com[link]))
+        )
+
+    drives = {}
+    s0 = drive.drive(0.0)[0]
+    for joint in geometry.joints:
+        if joint.kind == "floating" or joint.name in clearance:
+            continue
+        align = rotation_z_to(joint.axis)
+        m0 = marker(joint.parent, joint.origin_xyz, joint.origin_rotation @ align)
+        m1 = marker(joint.child, np.zeros(3), align)
+        if joint.kind in ("revolute", "continuous"):
+            mbs.AddObject(I.GenericJoint(markerNumbers=[m0, m1], constrainedAxes=[1, 1, 1, 1, 1, 0]))
+        elif joint.kind == "prismatic":
+            mbs.AddObject(I.GenericJoint(markerNumbers=[m0, m1], constrainedAxes=[1, 1, 0, 1, 1, 1]))
+            if joint.name in actuated:
+                k = actuated.index(joint.name)
+                hinge0, hinge1 = marker(joint.parent, joint.origin_xyz), marker(joint.child, np.zeros(3))
+                drives[k] = mbs.AddObject(I.ObjectConnectorDistance(markerNumbers=[hinge0, hinge1], distance=float(s0[k])))
+        else:
+            raise NotImplementedError(f"joint {joint.name!r} of type {joint.kind!r}")
+    for closure in run.mechanism.description.closures:
+        if closure.name in clearance:
+            continue
+        a, b = closure.parent, closure.child
+        mbs.AddObject(
+            I.SphericalJoint(markerNumbers=[marker(a.link, a.xyz, rpy_matrix(a.rpy)), marker(b.link, b.xyz, rpy_matrix(b.rpy))], constrainedAxes=[1, 1, 1])
+        )
+
+    elements = []
+    for site in ne.contacts:
+        element = _ContactElement(site, nodes, references)
+        size = 7 * len(element.nodes)
+        mbs.AddObject(
+            I.ObjectGenericODE2(
+                nodeNumbers=element.nodes,
+                massMatrix=np.zeros((size, size)),
+                forceUserFunction=element.force,
+            )
+        )
+        elements.append(element)
+
+    ee_body, ee_local = bodies[ne.ee_body], list(ne.ee_offset)
+    log_t: list = []
+    log_ee: list = []
+    log_force: list = []
+    log_contact = {e.site.name: ([], []) for e in elements}
+
+    def record(mbs, t, initial=False):
+        log_t.append(t)
+        log_ee.append(np.asarray(mbs.GetObjectOutputBody(ee_body, exu.OutputVariableType.Position, localPosition=ee_local)))
+        if initial:
+            log_force.append(np.full(len(actuated), np.nan))
+        else:
+            log_force.append(np.array([-mbs.GetObjectOutput(drives[k], exu.OutputVariableType.Force) for k in range(len(actuated))]))
+        for e in elements:
+            q, q_t = e.node_state(mbs, exu)
+            result, _, _ = e.evaluate(q, q_t)
+            if not initial:  # after a converged step: candidates out of contact track their approach rate
+                out = result.penetration <= 0.0
+                e.onset[out] = np.maximum(result.penetration_rate[out], ONSET_RATE_FLOOR)
+            log_contact[e.site.name][0].append(result.normal_force.copy())
+            log_contact[e.site.name][1].append(result.penetration.copy())
+
+    def pre_step(mbs, t):
+        s = lengths(t)  # t is the end of the step
+        for k, obj in drives.items():
+            mbs.SetObjectParameter(obj, "distance", float(s[k]))
+        return True
+
+    def post_step(mbs, t):
+        if t > log_t[-1]:  # Exudyn also calls it once at the start time
+            record(mbs, t)
+        return True
+
+    mbs.SetPreStepUserFunction(pre_step)
+    mbs.SetPostStepUserFunction(post_step)
+    mbs.Assemble()
+    ss = exu.SimulationSettings()
+    ti = ss.timeIntegration
+    ti.numberOfSteps = int(round(t_end / settings.step_size))
+    ti.endTime = t_end
+    ti.generalizedAlpha.spectralRadius = settings.spectral_radius
+    ti.generalizedAlpha.computeInitialAccelerations = False
+    ti.generalizedAlpha.resetAccelerations = False
+    ti.newton.relativeTolerance = settings.newton_relative_tolerance
+    ti.newton.absoluteTolerance = settings.newton_absolute_tolerance
+    ti.adaptiveStep = settings.adaptive_step
+    ti.verboseMode = settings.verbose
+    ss.solution.file.write = False
+    ss.show.computationTime = False
+    initial = consistent_accelerations(mbs, ss, acc0.ravel())
+    mbs.systemData.SetODE2Coordinates_tt(list(initial), configuration=exu.ConfigurationType.Initial)
+    record(mbs, 0.0, initial=True)
+    success, message = True, "the integration reached the end time"
+    solve_started = time.perf_counter()
+    try:
+        mbs.SolveDynamic(ss, solverType=exu.DynamicSolverType.GeneralizedAlpha)
+    except Exception as exc:  # noqa: BLE001 - Exudyn raises its own SolverError; report, keep the steps
+        success, message = False, f"{type(exc).__name__}: {exc}"
+    wall = time.perf_counter() - started
+    solve_time = time.perf_counter() - solve_started
+    contact = {
+        name: {"normal_force": np.array(forces), "penetration": np.array(pens)} for name, (forces, pens) in log_contact.items()
+    }
+    return ExudynResult(
+        success, message, settings, np.array(log_t), np.array(log_ee), np.array(log_force).reshape(len(log_t), -1), contact, wall, len(log_t) - 1, solve_time
+    )

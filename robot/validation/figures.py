@@ -1,0 +1,136 @@
+"""Comparison figures of the validation study (PNG; every axis labelled with its unit).
+
+Per scene:
+
+* ``validation_<scene>.png``: end-effector x and y displacement (seed paper
+  Figure 10: X- and Y-displacement, Newton-Euler against Lagrange), the
+  end-effector deviation from the ideal (prescribed) motion, the driving forces
+  and the contact normal forces, one line style per engine;
+* ``deviation_<scene>.png``: the largest driving-force deviation and the
+  end-effector deviation of Newton-Euler and Exudyn from the Lagrange model
+  against time (log scale), the first impact marked.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+
+from . import comparison as CMP  # noqa: E402
+
+STYLE = {
+    "lagrange": dict(color="black", linestyle="-", linewidth=1.4, label="Lagrange (Pinocchio)"),
+    "newton_euler": dict(color="tab:red", linestyle="--", linewidth=1.1, label="Newton-Euler"),
+    "exudyn": dict(color="tab:blue", linestyle=":", linewidth=1.3, label="Exudyn"),
+}
+ACTUATOR_COLORS = ["tab:blue", "tab:orange", "tab:green", "tab:red", "tab:purple"]
+
+
+def _engines(series: dict) -> list[str]:
+    return [name for name in ("lagrange", "newton_euler", "exudyn") if name in series]
+
+
+def scene_figures(scene: str, series: dict, metrics: dict, out: Path) -> list[Path]:
+    paths = [_overview(scene, series, metrics, out)]
+    if len(_engines(series)) > 1:
+        paths.append(_deviations(scene, series, metrics, out))
+    return paths
+
+
+def _overview(scene: str, series: dict, metrics: dict, out: Path) -> Path:
+    fig, axes = plt.subplots(2, 2, figsize=(13, 8.5), constrained_layout=True)
+    engines = _engines(series)
+    ax = axes[0, 0]
+    for name in engines:
+        s = series[name]
+        style = dict(STYLE[name])
+        label = style.pop("label")
+        ax.plot(s.t, 1e3 * s.ee_position[:, 0], label=f"x, {label}", **style)
+        ax.plot(s.t, 1e3 * s.ee_position[:, 1], alpha=0.6, **style)
+    ax.set(xlabel="time t [s]", ylabel="end-effector displacement [mm]", title="end-effector x (and y, faint)")
+    ax.legend(fontsize=8)
+    ax = axes[0, 1]
+    for name in engines:
+        s = series[name]
+        style = dict(STYLE[name])
+        label = style.pop("label")
+        dev = 1e6 * (s.ee_position - s.ee_ideal)
+        ax.plot(s.t, dev[:, 0], label=f"x, {label}", **style)
+        ax.plot(s.t, dev[:, 1], alpha=0.5, **{**style, "linewidth": 0.8})
+    ax.set(xlabel="time t [s]", ylabel="deviation from ideal motion [um]", title="end-effector deviation from the prescribed motion (x; y faint)")
+    ax.legend(fontsize=8)
+    ax = axes[1, 0]
+    for name in engines:
+        s = series[name]
+        style = dict(STYLE[name])
+        style.pop("label")
+        style.pop("color")
+        for k in range(s.driving_force.shape[1]):
+            ax.plot(s.t, s.driving_force[:, k], color=ACTUATOR_COLORS[k % 5], label=f"A{k + 1}" if name == "lagrange" else None, **style)
+    ax.set(xlabel="time t [s]", ylabel="driving force [N]", title="driving forces (solid Lagrange, dashed N-E, dotted Exudyn)")
+    ax.legend(fontsize=8, ncol=5)
+    ax = axes[1, 1]
+    sites = metrics.get("sites", [])
+    if sites:
+        for name in engines:
+            s = series[name]
+            style = dict(STYLE[name])
+            label = style.pop("label")
+            for j, site in enumerate(sites):
+                ax.plot(s.t, s.contact_force[site], label=f"{site}, {label}", alpha=1.0 if j == 0 else 0.7, **style)
+        ax.set_yscale("symlog", linthresh=10.0)
+        ax.set(xlabel="time t [s]", ylabel="contact normal force [N]", title="clearance-joint normal force (R1: sum of candidates)")
+        ax.legend(fontsize=8)
+    else:
+        ax.axis("off")
+        ax.text(0.02, 0.5, _summary_text(metrics), family="monospace", fontsize=9, va="center")
+    fig.suptitle(f"Validation, scene '{scene}' ({metrics['duration_s']} s)")
+    path = out / f"validation_{scene}.png"
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
+    return path
+
+
+def _summary_text(metrics: dict) -> str:
+    lines = ["max deviation from the Lagrange model (whole run):"]
+    for name, entry in metrics["engines"].items():
+        pw = entry.get("pointwise_before_first_impact")
+        if pw:
+            lines.append(f"{name}: driving force {pw['driving_force_max_abs_N']:.2e} N ({pw['driving_force_max_rel']:.1e} rel.),")
+            lines.append(f"{'':{len(name)}}  end effector {pw['ee_position_max_m']:.2e} m")
+    return "\n".join(lines)
+
+
+def _deviations(scene: str, series: dict, metrics: dict, out: Path) -> Path:
+    fig, axes = plt.subplots(1, 2, figsize=(13, 4.5), constrained_layout=True)
+    lagrange = series["lagrange"]
+    pairs = []
+    if "newton_euler@lagrange" in series:
+        pairs.append(("newton_euler", CMP.deviation_history(series["newton_euler@lagrange"], lagrange, same_times=True)))
+    if "exudyn" in series:
+        pairs.append(("exudyn", CMP.deviation_history(series["exudyn"], lagrange, same_times=False)))
+    floor = 1e-16
+    for name, (t, d_force, d_ee) in pairs:
+        style = dict(STYLE[name])
+        label = style.pop("label")
+        axes[0].semilogy(t, np.maximum(d_force, floor), label=label, **style)
+        axes[1].semilogy(t, np.maximum(d_ee, floor), label=label, **style)
+    first = metrics.get("first_impact_s")
+    for ax in axes:
+        if first is not None:
+            ax.axvline(first, color="gray", linewidth=0.8)
+            ax.text(first, ax.get_ylim()[1], " first impact", color="gray", fontsize=8, va="top")
+        ax.set_xlabel("time t [s]")
+        ax.legend(fontsize=8)
+    axes[0].set(ylabel="max |driving force - Lagrange| [N]", title="driving-force deviation from the Lagrange model")
+    axes[1].set(ylabel="|end-effector position - Lagrange| [m]", title="end-effector deviation from the Lagrange model")
+    fig.suptitle(f"Deviation from the Lagrange model, scene '{scene}' (Exudyn: Lagrange interpolated by cubic splines)")
+    path = out / f"deviation_{scene}.png"
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
+    return path

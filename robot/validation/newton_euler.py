@@ -1,0 +1,463 @@
+"""Newton-Euler formulation of the mechanism in absolute coordinates (the paper's second method).
+
+Written independently of Pinocchio's dynamics (no ``crba``/``rnea``/``aba``/
+``forwardDynamics``/``computeAllTerms``/Jacobians here): Pinocchio only maps the
+Lagrange model's initial state to absolute coordinates (:func:`initial_state`).
+
+Coordinates and equations
+-------------------------
+Each of the n moving bodies (every URDF link but the ground) has the position
+``r`` of its centre of mass (world), a unit quaternion ``p = (e0, e1, e2, e3)``
+(body -> world rotation ``A(p)``, body axes = the link's axes), the COM velocity
+``v`` (world) and the angular velocity ``w'`` in body axes. The state is
+``y = [r (3n), p (4n), v (3n), w' (3n)]`` and
+
+    r_dot = v,      p_dot = 1/2 p (x) (0, w'),
+    m v_dot          = m g + f_contact - (Phi_r^T lambda)
+    J' w'_dot + w' x J' w' = n'_contact - (Phi_pi'^T lambda)
+
+(Newton's law for the COM, Euler's for the rotation about the COM, body axes).
+The joint reactions are the multipliers ``lambda`` of the constraint equations
+written out in absolute coordinates (:mod:`.absolute_constraints`): revolute
+(spherical + 2 dot-1), universal (two revolutes through the cross), prismatic
+(3 dot-1 + 2 dot-2), spherical closures, and the five driving constraints
+``h . d - s_k(t) = 0`` (the actuator length along the prismatic axis). With
+``M = blockdiag(m_i I, J'_i)``, ``a = [v_dot, w'_dot]`` and the Baumgarte
+stabilised acceleration constraint, each evaluation solves the augmented system
+(index-1 DAE, seed paper eq. (24) in absolute coordinates)
+
+    [ M     Phi_q^T ] [ a      ]   [ Q                                  ]
+    [ Phi_q 0       ] [ lambda ] = [ gamma - 2 alpha Phi_dot - beta^2 Phi ]
+
+``Q = [m g + f_c; -w' x J' w' + n'_c]``. It is solved by its range-space
+(Schur-complement) form, exact for the block-diagonal ``M``:
+``(Phi_q M^-1 Phi_q^T) lambda = Phi_q M^-1 Q - rhs``, ``a = M^-1 (Q - Phi_q^T lambda)``.
+``Phi_dot = Phi_q [v; w'] + Phi_t``. The driving force of actuator k is
+``-lambda_k`` (positive: the actuator pushes), as in ``robot.dynamics``.
+
+Clearance joints impose no constraint (the joint or closure is left out); the
+contact layer ``clearance_contact`` gives the wrenches ``[f, m]`` about each
+element frame origin (world axes); on the body carrying the element, at
+``s = A s'`` from its COM: ``f_c += f``, ``n'_c += A^T (m + s x f)``.
+
+The initial state is the Lagrange model's ``y0`` mapped through Pinocchio's
+forward kinematics (positions, rotations and velocities of the link frames).
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+import pinocchio as pin
+
+from clearance_contact import ContactError
+
+from ..mechanism import rotation_z_to
+from ..run import Run
+from .absolute_constraints import BodyStates, ConstraintSet, cross
+from .bodies import MechanismGeometry, read_geometry, rpy_matrix
+from .event_loop import EventRun, integrate_with_events
+
+GRAVITY = np.array([0.0, 0.0, -9.81])
+
+
+# --- quaternions (e0 scalar) -------------------------------------------------------------
+def quaternion_to_matrix(p: np.ndarray) -> np.ndarray:
+    """Rotation matrices of unit quaternions (k, 4) -> (k, 3, 3)."""
+    e0, e1, e2, e3 = p[:, 0], p[:, 1], p[:, 2], p[:, 3]
+    out = np.empty((p.shape[0], 3, 3))
+    out[:, 0, 0] = 1 - 2 * (e2 * e2 + e3 * e3)
+    out[:, 0, 1] = 2 * (e1 * e2 - e0 * e3)
+    out[:, 0, 2] = 2 * (e1 * e3 + e0 * e2)
+    out[:, 1, 0] = 2 * (e1 * e2 + e0 * e3)
+    out[:, 1, 1] = 1 - 2 * (e1 * e1 + e3 * e3)
+    out[:, 1, 2] = 2 * (e2 * e3 - e0 * e1)
+    out[:, 2, 0] = 2 * (e1 * e3 - e0 * e2)
+    out[:, 2, 1] = 2 * (e2 * e3 + e0 * e1)
+    out[:, 2, 2] = 1 - 2 * (e1 * e1 + e2 * e2)
+    return out
+
+
+def matrix_to_quaternion(R: np.ndarray) -> np.ndarray:
+    """Unit quaternion (e0 >= 0) of a rotation matrix."""
+    q = pin.Quaternion(np.asarray(R, dtype=float))
+    out = np.array([q.w, q.x, q.y, q.z])
+    return out if out[0] >= 0 else -out
+
+
+def quaternion_rate(p: np.ndarray, w: np.ndarray) -> np.ndarray:
+    """p_dot = 1/2 p (x) (0, w') for body-axes angular velocities (k, 3)."""
+    e0, e = p[:, :1], p[:, 1:]
+    return 0.5 * np.hstack([-np.einsum("ki,ki->k", e, w)[:, None], e0 * w + cross(e, w)])
+
+
+# --- the model ----------------------------------------------------------------------------
+@dataclass(frozen=True)
+class ElementFrame:
+    """A contact element frame fixed to a body: body index, offset from the COM and rotation (body axes)."""
+
+    body: int
+    offset: np.ndarray
+    rotation: np.ndarray
+
+
+@dataclass(frozen=True)
+class ContactSiteNE:
+    name: str
+    law: object
+    outer: ElementFrame
+    inner: ElementFrame
+    first: int
+
+    @property
+    def candidates(self) -> slice:
+        return slice(self.first, self.first + self.law.n_candidates)
+
+
+@dataclass
+class NewtonEulerModel:
+    """Bodies, constraints, contact sites and drive of the mechanism in absolute coordinates."""
+
+    geometry: MechanismGeometry
+    mass: np.ndarray
+    inertia: np.ndarray
+    inertia_inv: np.ndarray
+    constraints: ConstraintSet
+    contacts: tuple[ContactSiteNE, ...]
+    drive: object
+    alpha: float
+    beta: float
+    ee_body: int
+    ee_offset: np.ndarray
+    n_candidates: int
+    rhs_calls: int = 0
+    names: tuple[str, ...] = field(default_factory=tuple)
+    minv: np.ndarray = field(default=None, repr=False)  # (n, 6, 6) block inverses of M
+    minv_rows: np.ndarray = field(default=None, repr=False)  # (rows, 2, 6, 6) M^-1 blocks of each row's bodies
+
+    def __post_init__(self) -> None:
+        n = self.n
+        self.minv = np.zeros((n + 1, 6, 6))  # the ground (index n) has no inverse mass
+        self.minv[:n, :3, :3] = np.eye(3) / self.mass[:, None, None]
+        self.minv[:n, 3:, 3:] = self.inertia_inv
+        self.minv_rows = self.minv[self.constraints.bodies]
+        self.minv = self.minv[:n]
+
+    @property
+    def n(self) -> int:
+        return len(self.mass)
+
+    # state layout
+    def split(self, y: np.ndarray):
+        n = self.n
+        r = y[: 3 * n].reshape(n, 3)
+        p = y[3 * n : 7 * n].reshape(n, 4)
+        v = y[7 * n : 10 * n].reshape(n, 3)
+        w = y[10 * n : 13 * n].reshape(n, 3)
+        return r, p, v, w
+
+    def normalise(self, y: np.ndarray) -> np.ndarray:
+        y = np.array(y, dtype=float)
+        n = self.n
+        p = y[3 * n : 7 * n].reshape(n, 4)
+        p /= np.linalg.norm(p, axis=1)[:, None]
+        return y
+
+    def states(self, y: np.ndarray) -> BodyStates:
+        r, p, v, w = self.split(y)
+        p = p / np.linalg.norm(p, axis=1)[:, None]
+        A = quaternion_to_matrix(p)
+        zero = np.zeros((1, 3))
+        return BodyStates(np.vstack([r, zero]), np.concatenate([A, np.eye(3)[None]]), np.vstack([v, zero]), np.vstack([w, zero]))
+
+
+def _element(geometry: MechanismGeometry, link: str, xyz, rotation) -> ElementFrame:
+    body = geometry.body(link)
+    com = np.zeros(3) if body is None else body.com
+    return ElementFrame(geometry.body_index(link), np.asarray(xyz, float) - com, np.asarray(rotation, float))
+
+
+def _perpendiculars(axis: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    frame = rotation_z_to(axis)
+    return frame[:, 0], frame[:, 1]
+
+
+def build_model(run: Run) -> NewtonEulerModel:
+    """The Newton-Euler model of a built run (same URDF, clearance joints, laws, drive and gains)."""
+    scene, description = run.scene, run.mechanism.description
+    geometry = read_geometry(description)
+    clearance = {c.joint: c for c in scene.clearances}
+    bodies = geometry.bodies
+    com = {b.name: b.com for b in bodies}
+    com[geometry.ground] = np.zeros(3)
+    cs = ConstraintSet()
+    actuated = list(description.actuated_joints)
+    for joint in geometry.joints:
+        i, j = geometry.body_index(joint.parent), geometry.body_index(joint.child)
+        point_i = joint.origin_xyz - com[joint.parent]  # joint origin, parent body frame
+        point_j = -com[joint.child]  # child link origin, child body frame
+        axis_i = joint.origin_rotation @ joint.axis  # joint axis in the parent link frame
+        if joint.name in clearance or joint.kind == "floating":
+            continue
+        if joint.kind in ("revolute", "continuous"):
+            cs.spherical(i, point_i, j, point_j, joint.name)
+            g, h = _perpendiculars(joint.axis)  # normal to the axis, child frame
+            cs.dot1(i, axis_i, j, g, f"{joint.name}:axis-1")
+            cs.dot1(i, axis_i, j, h, f"{joint.name}:axis-2")
+        elif joint.kind == "prismatic":
+            R = joint.origin_rotation
+            cs.dot1(i, R[:, 0], j, np.array([0.0, 1.0, 0.0]), f"{joint.name}:lock-z")
+            cs.dot1(i, R[:, 1], j, np.array([0.0, 0.0, 1.0]), f"{joint.name}:lock-x")
+            cs.dot1(i, R[:, 2], j, np.array([1.0, 0.0, 0.0]), f"{joint.name}:lock-y")
+            g, h = _perpendiculars(axis_i)
+            cs.dot2(i, g, point_i, j, point_j, f"{joint.name}:line-1")
+            cs.dot2(i, h, point_i, j, point_j, f"{joint.name}:line-2")
+            if joint.name in actuated:
+                cs.dot2(i, axis_i, point_i, j, point_j, f"{joint.name}:drive", driver=actuated.index(joint.name))
+        elif joint.kind == "fixed":
+            raise NotImplementedError(f"joint {joint.name!r}: fixed joints are not needed by the 4-UPS/RPS and not modelled")
+        else:
+            raise NotImplementedError(f"joint {joint.name!r} of type {joint.kind!r}")
+    missing = [name for name in actuated if geometry.joint(name).kind != "prismatic"]
+    if missing:
+        raise NotImplementedError(f"actuated joints {missing} are not prismatic")
+    for closure in description.closures:
+        if closure.name in clearance:
+            continue
+        if closure.kind != "spherical":
+            raise NotImplementedError(f"closure {closure.name!r}: only spherical closures are modelled")
+        a, b = closure.parent, closure.child
+        cs.spherical(
+            geometry.body_index(a.link), np.array(a.xyz) - com[a.link], geometry.body_index(b.link), np.array(b.xyz) - com[b.link], closure.name
+        )
+    cs.freeze(len(bodies))
+
+    # clearance sites in the Lagrange model's order (closures first, then tree joints)
+    contacts, first = [], 0
+    closures = {c.name: c for c in description.closures}
+    ordered = [c for c in scene.clearances if c.joint in closures] + [c for c in scene.clearances if c.joint not in closures]
+    for spec in ordered:
+        if spec.joint in closures:
+            c = closures[spec.joint]
+            parent = _element(geometry, c.parent.link, c.parent.xyz, rpy_matrix(c.parent.rpy))
+            child = _element(geometry, c.child.link, c.child.xyz, rpy_matrix(c.child.rpy))
+        else:
+            joint = geometry.joint(spec.joint)
+            align = rotation_z_to(joint.axis)
+            parent = _element(geometry, joint.parent, joint.origin_xyz, joint.origin_rotation @ align)
+            child = _element(geometry, joint.child, np.zeros(3), align)
+        outer, inner = (child, parent) if spec.outer_on == "child" else (parent, child)
+        contacts.append(ContactSiteNE(spec.joint, spec.law, outer, inner, first))
+        first += spec.law.n_candidates
+
+    mass = np.array([b.mass for b in bodies])
+    inertia = np.array([b.inertia for b in bodies])
+    ee_link = scene.end_effector
+    return NewtonEulerModel(
+        geometry=geometry,
+        mass=mass,
+        inertia=inertia,
+        inertia_inv=np.linalg.inv(inertia),
+        constraints=cs,
+        contacts=tuple(contacts),
+        drive=run.dynamics.drive,
+        alpha=scene.baumgarte.alpha,
+        beta=scene.baumgarte.beta,
+        ee_body=geometry.body_index(ee_link),
+        ee_offset=-com[ee_link],
+        n_candidates=first,
+        names=tuple(b.name for b in bodies),
+    )
+
+
+# --- initial state --------------------------------------------------------------------------
+def initial_state(model: NewtonEulerModel, run: Run) -> np.ndarray:
+    """The Lagrange initial state ``run.y0`` in absolute coordinates (input mapping through Pinocchio kinematics)."""
+    pmodel = run.mechanism.model
+    data = pmodel.createData()
+    nq, nv = pmodel.nq, pmodel.nv
+    q, v = run.y0[:nq], run.y0[nq : nq + nv]
+    pin.forwardKinematics(pmodel, data, q, v)
+    pin.updateFramePlacements(pmodel, data)
+    n = model.n
+    r, p, vel, w = np.empty((n, 3)), np.empty((n, 4)), np.empty((n, 3)), np.empty((n, 3))
+    for k, body in enumerate(model.geometry.bodies):
+        fid = pmodel.getFrameId(body.name, pin.FrameType.BODY)
+        placement = data.oMf[fid]
+        twist = pin.getFrameVelocity(pmodel, data, fid, pin.ReferenceFrame.LOCAL_WORLD_ALIGNED)
+        R = placement.rotation
+        lever = R @ body.com
+        r[k] = placement.translation + lever
+        p[k] = matrix_to_quaternion(R)
+        vel[k] = twist.linear + np.cross(twist.angular, lever)
+        w[k] = R.T @ twist.angular
+    return np.concatenate([r.ravel(), p.ravel(), vel.ravel(), w.ravel()])
+
+
+# --- evaluation -------------------------------------------------------------------------------
+@dataclass
+class NEEvaluation:
+    ydot: np.ndarray
+    multipliers: np.ndarray
+    residual: np.ndarray
+    contacts: list
+    driving_force: np.ndarray
+    ee_position: np.ndarray
+
+
+def _element_state(states: BodyStates, frame: ElementFrame):
+    b = frame.body if frame.body >= 0 else states.n
+    A = states.A[b]
+    lever = A @ frame.offset
+    omega = A @ states.w[b]
+    return A @ frame.rotation, states.r[b] + lever, np.concatenate([states.v[b] + cross(omega, lever), omega]), lever
+
+
+def evaluate(model: NewtonEulerModel, t: float, y: np.ndarray, onset: np.ndarray) -> NEEvaluation:
+    """Solve the stabilised augmented system at (t, y)."""
+    model.rhs_calls += 1
+    n = model.n
+    states = model.states(y)
+    rows = model.constraints.evaluate(states, model.drive.drive(t))
+    A, w = states.A[:n], states.w[:n]
+    force = model.mass[:, None] * GRAVITY
+    Jw = np.einsum("kij,kj->ki", model.inertia, w)
+    torque = -cross(w, Jw)
+    contacts = []
+    for site in model.contacts:
+        Ro, po, two, lever_o = _element_state(states, site.outer)
+        Ri, pi_, twi, lever_i = _element_state(states, site.inner)
+        result = site.law.evaluate(Ro, po, two, Ri, pi_, twi, onset[site.candidates])
+        contacts.append(result)
+        for frame, lever, wrench in ((site.outer, lever_o, result.wrench_outer), (site.inner, lever_i, result.wrench_inner)):
+            if frame.body < 0 or not np.any(wrench):
+                continue
+            b = frame.body
+            force[b] += wrench[:3]
+            torque[b] += A[b].T @ (wrench[3:] + cross(lever, wrench[:3]))
+    cs = model.constraints
+    J = rows.jacobian
+    phi_dot = cs.times(J, np.hstack([states.v[:n], w])) + rows.phi_t
+    rhs = rows.gamma - 2.0 * model.alpha * phi_dot - model.beta**2 * rows.phi
+    Q = np.hstack([force, torque])  # (n, 6)
+    JM = np.einsum("rsij,rsj->rsi", model.minv_rows, J)  # Phi_q M^-1, row blocks
+    schur = cs.weighted_gram(J, JM)  # Phi_q M^-1 Phi_q^T
+    padded_q = np.vstack([Q, np.zeros((1, 6))])
+    lam = np.linalg.solve(schur, np.einsum("rsk,rsk->r", JM, padded_q[cs.bodies]) - rhs)
+    acc = np.einsum("kij,kj->ki", model.minv, Q - cs.transpose_times(J, lam))
+    r, p, v, _ = model.split(y)
+    p = p / np.linalg.norm(p, axis=1)[:, None]
+    ydot = np.concatenate([v.ravel(), quaternion_rate(p, w).ravel(), acc[:, :3].ravel(), acc[:, 3:].ravel()])
+    driving = np.empty(len(cs.driving_order))
+    driving[cs.driving_order] = -lam[cs.driving_rows]
+    ee = states.r[model.ee_body] + states.A[model.ee_body] @ model.ee_offset
+    return NEEvaluation(ydot, lam, rows.phi, contacts, driving, ee)
+
+
+def penetrations(model: NewtonEulerModel, y: np.ndarray, onset: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Penetration and its rate for every contact candidate."""
+    states = model.states(y)
+    pen = np.empty(model.n_candidates)
+    rate = np.empty(model.n_candidates)
+    for site in model.contacts:
+        Ro, po, two, _ = _element_state(states, site.outer)
+        Ri, pi_, twi, _ = _element_state(states, site.inner)
+        result = site.law.evaluate(Ro, po, two, Ri, pi_, twi, onset[site.candidates])
+        pen[site.candidates] = result.penetration
+        rate[site.candidates] = result.penetration_rate
+    return pen, rate
+
+
+# --- simulation -------------------------------------------------------------------------------
+@dataclass
+class NEResult:
+    """Outputs of a Newton-Euler run at its records and at the requested output times."""
+
+    run: EventRun
+    arrays: dict
+    eval_arrays: dict
+    wall_time: float
+
+    @property
+    def success(self) -> bool:
+        return self.run.success
+
+
+def outputs(model: NewtonEulerModel, t: np.ndarray, y: np.ndarray, onset: np.ndarray) -> dict:
+    """Driving forces, end-effector position, constraint residual and contact forces at given states."""
+    n = len(t)
+    out = {
+        "t": np.asarray(t),
+        "driving_force": np.full((n, len(model.constraints.driving_order)), np.nan),
+        "ee_position": np.full((n, 3), np.nan),
+        "constraint_residual": np.full(n, np.nan),
+    }
+    for site in model.contacts:
+        k = site.law.n_candidates
+        out[f"{site.name}_normal_force"] = np.full((n, k), np.nan)
+        out[f"{site.name}_penetration"] = np.full((n, k), np.nan)
+    for i in range(n):
+        if not np.all(np.isfinite(y[i])):
+            continue
+        ev = evaluate(model, float(t[i]), model.normalise(y[i]), onset[i])
+        out["driving_force"][i] = ev.driving_force
+        out["ee_position"][i] = ev.ee_position
+        out["constraint_residual"][i] = np.max(np.abs(ev.residual))
+        for site, result in zip(model.contacts, ev.contacts):
+            out[f"{site.name}_normal_force"][i] = result.normal_force
+            out[f"{site.name}_penetration"][i] = result.penetration
+    return out
+
+
+def simulate(
+    run: Run,
+    *,
+    t_end: float | None = None,
+    method: str | None = None,
+    rtol: float | None = None,
+    atol: float | None = None,
+    max_step: float | None = None,
+    t_eval: np.ndarray | None = None,
+) -> NEResult:
+    """Integrate the Newton-Euler model of ``run`` (solver settings default to the scene's)."""
+    started = time.perf_counter()
+    model = build_model(run)
+    solver = run.scene.solver
+    y0 = initial_state(model, run)
+
+    def rhs(t, y, onset):
+        return evaluate(model, t, y, onset).ydot
+
+    def probe(t, y, onset):
+        return penetrations(model, y, onset)
+
+    events = integrate_with_events(
+        rhs,
+        probe,
+        y0,
+        (0.0, run.scene.duration if t_end is None else t_end),
+        model.n_candidates,
+        normalise=model.normalise,
+        method=method or solver.method,
+        rtol=rtol or solver.rtol,
+        atol=atol or solver.atol,
+        max_step=max_step or solver.max_step,
+        t_eval=t_eval,
+    )
+    arrays = outputs(model, events.t, events.y, events.onset_rates)
+    arrays["record_kind"] = events.kind
+    eval_arrays = outputs(model, events.t_eval, events.y_eval, events.onset_eval) if len(events.t_eval) else {}
+    return NEResult(events, arrays, eval_arrays, time.perf_counter() - started)
+
+
+__all__ = [
+    "NewtonEulerModel",
+    "build_model",
+    "initial_state",
+    "evaluate",
+    "simulate",
+    "NEResult",
+    "ContactError",
+]

@@ -1,0 +1,227 @@
+"""The validation study: each scene with the Lagrange model, Newton-Euler and Exudyn; JSON and figures.
+
+``python scripts/validate.py [--out DIR] [--scenes ...] [--duration SCENE=T ...]``
+calls :func:`main`. Defaults (:data:`DEFAULT_DURATIONS`): the ideal mechanism over
+one period of the reference motion (1 s), the clearance scenes over 0.5 s (the
+first impacts, the transient of the misaligned bearing and a few tens of
+impacts), which keeps the whole study to a few minutes on two cores.
+
+Settings: the Lagrange model and Newton-Euler use the scene's integrator
+(RK45 and its tolerances, the same for both); Exudyn uses generalized-alpha with
+fixed steps (:data:`EXUDYN_SETTINGS`: 1e-4 s for the ideal mechanism, 1e-5 s with
+clearance, where one impact lasts 0.1-0.3 ms).
+"""
+
+from __future__ import annotations
+
+import argparse
+import dataclasses
+import json
+import math
+import time
+from pathlib import Path
+
+import numpy as np
+
+from ..platform_kinematics import platform_state
+from ..run import build_run, run_scene
+from . import comparison as CMP
+from . import exudyn_model as EX
+from . import newton_euler as NE
+
+DEFAULT_SCENES = ("ideal", "spherical", "compound", "compound_misaligned")
+DEFAULT_DURATIONS = {"ideal": 1.0, "spherical": 0.5, "compound": 0.5, "compound_misaligned": 0.5}
+EXUDYN_SETTINGS = {
+    "ideal": EX.ExudynSettings(step_size=1e-4, spectral_radius=0.5, newton_relative_tolerance=1e-12, newton_absolute_tolerance=1e-14),
+    "clearance": EX.ExudynSettings(step_size=1e-5, spectral_radius=0.5, newton_relative_tolerance=1e-10, newton_absolute_tolerance=1e-12),
+}
+ENGINES = ("lagrange", "newton_euler", "exudyn")
+
+
+def exudyn_settings_for(run) -> EX.ExudynSettings:
+    return EXUDYN_SETTINGS["clearance" if run.scene.clearances else "ideal"]
+
+
+def ideal_positions(run, t: np.ndarray) -> np.ndarray:
+    """Prescribed platform-origin position at the times t (the ideal mechanism's end effector)."""
+    out = np.empty((len(t), 3))
+    for i, ti in enumerate(t):
+        pose, _, _ = run.dynamics.drive.pose(float(ti))
+        out[i] = platform_state(run.layout, pose).position
+    return out
+
+
+def _sites(run) -> list[str]:
+    return [c.joint for c in run.scene.clearances]
+
+
+def lagrange_series(run) -> CMP.EngineSeries:
+    started = time.perf_counter()
+    result = run_scene(run)
+    wall = time.perf_counter() - started
+    contact = {site: np.sum(result[f"{site}_normal_force"], axis=1) for site in _sites(run)}
+    onsets = result["event_t"][result["event_is_onset"]] if "event_t" in result.arrays else np.zeros(0)
+    return CMP.EngineSeries(
+        "lagrange", result["t"], result["driving_force"], result["ee_position"], contact, np.unique(onsets), wall, result.success, result.message,
+        integration_time=float(result.counts["wall_time"]),
+    )
+
+
+def newton_euler_series(run, t_eval: np.ndarray) -> tuple[CMP.EngineSeries, CMP.EngineSeries]:
+    """The Newton-Euler run at its own records, and sampled at ``t_eval`` (dense output)."""
+    result = NE.simulate(run, t_eval=t_eval)
+    sites = _sites(run)
+    onsets = np.unique([t for t, _, kind in result.run.events if kind == "onset"])
+    a, e = result.arrays, result.eval_arrays
+
+    def series(arrays):
+        contact = {site: np.sum(arrays[f"{site}_normal_force"], axis=1) for site in sites}
+        return CMP.EngineSeries(
+            "newton_euler", arrays["t"], arrays["driving_force"], arrays["ee_position"], contact, onsets, result.wall_time, result.success, result.run.message,
+            integration_time=result.run.wall_time,
+        )
+
+    return series(a), series(e)
+
+
+def exudyn_series(run, settings: EX.ExudynSettings) -> CMP.EngineSeries:
+    result = EX.simulate(run, settings)
+    contact = {site: np.sum(result.contact[site]["normal_force"], axis=1) for site in _sites(run)}
+    onsets = []
+    for site in _sites(run):
+        pen = result.contact[site]["penetration"]
+        entering = (pen[1:] > 0) & ~(pen[:-1] > 0)
+        onsets.extend(result.t[1:][np.any(entering, axis=1)])
+    return CMP.EngineSeries(
+        "exudyn", result.t, result.driving_force, result.ee_position, contact, np.unique(onsets), result.wall_time, result.success, result.message,
+        integration_time=result.solve_time,
+    )
+
+
+def compare_scene(scene: str, duration: float, engines=ENGINES, progress=print) -> tuple[dict, dict]:
+    """Run one scene with the engines; returns (metrics for the JSON, series for the figures)."""
+    run = build_run(scene, duration=duration)
+    progress(f"[{scene}] Lagrange ({duration} s)")
+    lagrange = lagrange_series(run)
+    series = {"lagrange": lagrange}
+    metrics: dict = {"duration_s": duration, "sites": _sites(run), "engines": {}}
+    if "newton_euler" in engines:
+        progress(f"[{scene}] Newton-Euler")
+        ne_records, ne_at_lagrange = newton_euler_series(run, lagrange.t)
+        series["newton_euler"] = ne_records
+        series["newton_euler@lagrange"] = ne_at_lagrange
+    if "exudyn" in engines:
+        settings = exudyn_settings_for(run)
+        progress(f"[{scene}] Exudyn (h = {settings.step_size} s)")
+        series["exudyn"] = exudyn_series(run, settings)
+        metrics["exudyn_settings"] = settings.__dict__.copy()
+    for s in series.values():
+        s.ee_ideal = ideal_positions(run, s.t)
+    window_end = lagrange.first_onset  # inf for the ideal mechanism: whole run
+    stats_ref = CMP.statistics(lagrange, duration)
+    for name in series:
+        if name.endswith("@lagrange"):
+            continue
+        s = series[name]
+        entry = {
+            "success": s.success,
+            "message": s.message,
+            "wall_time_s": s.wall_time,
+            "integration_wall_time_s": s.integration_time,
+            "n_records": int(len(s.t)),
+            "statistics": CMP.statistics(s, duration),
+        }
+        if name != "lagrange":
+            entry["statistics_relative_to_lagrange"] = CMP.compare_statistics(entry["statistics"], stats_ref)
+            if name == "newton_euler":
+                sampled = series["newton_euler@lagrange"]
+                entry["pointwise_before_first_impact"] = CMP.pointwise_on_reference_times(sampled, lagrange, window_end)
+                entry["pointwise_whole_run"] = CMP.pointwise_on_reference_times(sampled, lagrange, math.inf)
+                entry["separation_time_1um_s"] = CMP.separation_time(sampled, lagrange, same_times=True)
+            else:
+                entry["pointwise_before_first_impact"] = CMP.pointwise_interpolated(s, lagrange, window_end)
+                entry["separation_time_1um_s"] = CMP.separation_time(s, lagrange, same_times=False)
+        metrics["engines"][name] = entry
+    metrics["first_impact_s"] = None if not math.isfinite(window_end) else window_end
+    return metrics, series
+
+
+def summary_table(results: dict) -> str:
+    """A plain-text table of the main numbers."""
+    lines = []
+    for scene, m in results["scenes"].items():
+        lines.append(f"{scene} ({m['duration_s']} s, first impact {m['first_impact_s']})")
+        for name, e in m["engines"].items():
+            pw = e.get("pointwise_before_first_impact", {})
+            st = e["statistics"]
+            peaks = ", ".join(f"{k} peak {v['peak_N']:.1f} N mean {v['mean_N']:.2f} N rms {v['rms_N']:.2f} N" for k, v in st["contact"].items())
+            line = f"  {name:13s} wall {e['wall_time_s']:7.1f} s"
+            if pw:
+                line += f"  dF {pw['driving_force_max_abs_N']:.3g} N ({pw['driving_force_max_rel']:.2g})  dEE {pw['ee_position_max_m']:.3g} m"
+            line += f"  impacts {st['n_impacts']}  {peaks}"
+            if "rms_ee_deviation_from_ideal_m" in st:
+                line += f"  EE rms dev {st['rms_ee_deviation_from_ideal_m']:.3g} m"
+            if e.get("separation_time_1um_s") is not None:
+                line += f"  separates (1 um) at {e['separation_time_1um_s']:.4f} s"
+            lines.append(line)
+    return "\n".join(lines)
+
+
+def parse_args(argv=None) -> argparse.Namespace:
+    parser = argparse.ArgumentParser(description="Cross-check the Lagrange model against Newton-Euler and Exudyn.")
+    parser.add_argument("--out", default="results/validation", help="output directory (default results/validation)")
+    parser.add_argument("--scenes", nargs="+", default=list(DEFAULT_SCENES), help=f"scenes (default {' '.join(DEFAULT_SCENES)})")
+    parser.add_argument("--duration", nargs="*", default=[], metavar="SCENE=T", help="override a scene's duration (s)")
+    parser.add_argument("--engines", nargs="+", default=list(ENGINES[1:]), choices=ENGINES[1:], help="engines besides the Lagrange model")
+    parser.add_argument("--exudyn-step", type=float, default=None, help="Exudyn step size with clearance joints (default 1e-5 s)")
+    parser.add_argument("--no-figures", action="store_true", help="write validation.json only")
+    return parser.parse_args(argv)
+
+
+def main(argv=None) -> int:
+    args = parse_args(argv)
+    durations = dict(DEFAULT_DURATIONS)
+    for item in args.duration:
+        scene, _, value = item.partition("=")
+        try:
+            durations[scene] = float(value)
+        except ValueError:
+            raise SystemExit(f"--duration {item!r}: expected SCENE=SECONDS") from None
+    if args.exudyn_step is not None:
+        EXUDYN_SETTINGS["clearance"] = dataclasses.replace(EXUDYN_SETTINGS["clearance"], step_size=args.exudyn_step)
+    out = Path(args.out)
+    out.mkdir(parents=True, exist_ok=True)
+    results = {
+        "description": "Lagrange model (robot.dynamics) against Newton-Euler (robot.validation.newton_euler) and Exudyn (robot.validation.exudyn_model); see docs/validation.md",
+        "scenes": {},
+    }
+    started = time.perf_counter()
+    for scene in args.scenes:
+        duration = durations.get(scene, 0.5)
+        metrics, series = compare_scene(scene, duration, ("lagrange", *args.engines))
+        results["scenes"][scene] = metrics
+        if not args.no_figures:
+            from .figures import scene_figures
+
+            metrics["figures"] = [p.name for p in scene_figures(scene, series, metrics, out)]
+        (out / "validation.json").write_text(json.dumps(_clean(results), indent=2))
+    results["total_wall_time_s"] = time.perf_counter() - started
+    (out / "validation.json").write_text(json.dumps(_clean(results), indent=2))
+    print(summary_table(results))
+    print(f"wrote {out / 'validation.json'}")
+    return 0
+
+
+def _clean(value):
+    """JSON-ready copy: numpy scalars and arrays to Python, non-finite floats to null."""
+    if isinstance(value, dict):
+        return {str(k): _clean(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [_clean(v) for v in value]
+    if isinstance(value, np.ndarray):
+        return _clean(value.tolist())
+    if isinstance(value, (np.floating, np.integer, np.bool_)):
+        value = value.item()
+    if isinstance(value, float) and not math.isfinite(value):
+        return None
+    return value

@@ -1,0 +1,190 @@
+"""Speed against accuracy of every integrator on offer, failure boundaries, RHS speed.
+
+    python scripts/work_precision.py [--scene NAME] [--t-end T] [--out DIR]
+        [--quick] [--skip-stability] [--skip-sweep] [--realtime-t-end T] [--methods M1,M2]
+
+Writes to DIR (default results/work_precision/SCENE):
+
+* ``work_precision.json``: reference and its convergence check, every run (CPU
+  time, steps, rejected steps, right-hand-side calls, events, errors), the
+  cheapest run at engineering accuracy, ``rhs_us`` (microseconds per
+  right-hand side, out of contact and in contact, against the reference
+  implementation), ``realtime_factor`` (wall time over simulated time of the
+  scene's default solver over ``--realtime-t-end``), the stability maps;
+* ``work_precision.png``: error against CPU time, one line per method;
+* ``stability_stiffness.png``, ``stability_baumgarte.png``,
+  ``stability_hidden_contacts.png``: the failure maps.
+
+The logic lives in ``robot/studies``; ``docs/work-precision.md`` reports.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import platform
+import sys
+import time
+from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+
+import numpy as np  # noqa: E402
+import scipy  # noqa: E402
+
+from robot.atomic import atomic_write_text  # noqa: E402
+from robot.cli import exit_on_error  # noqa: E402
+from robot.integrators import METHODS  # noqa: E402
+from robot.run import build_run  # noqa: E402
+from robot.scene import shipped_scenes  # noqa: E402
+from robot.studies import speed, stability  # noqa: E402
+from robot.studies.common import simulate  # noqa: E402
+from robot.studies import work_precision as wp  # noqa: E402
+
+
+def _json_default(value):
+    if isinstance(value, (np.floating, np.integer)):
+        return value.item()
+    if isinstance(value, np.ndarray):
+        return value.tolist()
+    if isinstance(value, np.bool_):
+        return bool(value)
+    raise TypeError(f"not JSON serialisable: {type(value)}")
+
+
+def _clean(value):
+    """NaN and inf as null (strict JSON)."""
+    if isinstance(value, float) and not math.isfinite(value):
+        return None
+    if isinstance(value, dict):
+        return {k: _clean(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [_clean(v) for v in value]
+    return value
+
+
+def main() -> int:
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--scene", default="compound_misaligned", help=f"shipped scene ({', '.join(shipped_scenes())}) or path")
+    parser.add_argument("--t-end", type=float, default=0.2, help="horizon of the sweep in s (default 0.2)")
+    parser.add_argument("--out", type=Path, default=None, help="output folder (default results/work_precision/SCENE)")
+    parser.add_argument("--quick", action="store_true", help="a small sweep and small maps (minutes, not tens of minutes)")
+    parser.add_argument("--skip-sweep", action="store_true", help="no work-precision sweep")
+    parser.add_argument("--skip-stability", action="store_true", help="no stability maps")
+    parser.add_argument("--realtime-t-end", type=float, default=2.0, help="horizon of the real-time run (0: skip)")
+    parser.add_argument("--methods", default=None, help=f"comma-separated subset of {', '.join(METHODS)}")
+    parser.add_argument("--output-step", type=float, default=1e-4, help="common output grid for pointwise errors (s)")
+    args = parser.parse_args()
+
+    run = build_run(args.scene)
+    name = run.scene.name
+    out = args.out or Path("results") / "work_precision" / name
+    out.mkdir(parents=True, exist_ok=True)
+    methods = args.methods.split(",") if args.methods else list(METHODS)
+    unknown = [m for m in methods if m not in METHODS]
+    if unknown:
+        raise SystemExit(f"unknown methods {unknown}; on offer: {', '.join(METHODS)}")
+    started = time.perf_counter()
+
+    def say(text: str) -> None:
+        print(f"[{time.perf_counter() - started:7.1f} s] {text}", flush=True)
+
+    report: dict = {
+        "scene": name,
+        "t_end": args.t_end,
+        "output_step": args.output_step,
+        "machine": {
+            "python": platform.python_version(),
+            "numpy": np.__version__,
+            "scipy": scipy.__version__,
+            "processor": platform.processor() or platform.machine(),
+            "note": "shared 2-core machine: CPU times are process_time of the integration only; medians where repeated",
+        },
+        "scene_solver": {
+            "method": run.scene.solver.method,
+            "rtol": run.scene.solver.rtol,
+            "atol": run.scene.solver.atol,
+            "max_step": run.scene.solver.max_step,
+            "first_step": run.scene.solver.first_step,
+        },
+    }
+
+    say("right-hand side benchmark")
+    bench = speed.rhs_benchmark(run, repeats=7 if not args.quick else 3, number=2000 if not args.quick else 500)
+    report["rhs_benchmark"] = bench
+    report["rhs_us"] = bench["initial"]["fast"]["median_us"]
+    report["rhs_us_reference_implementation"] = bench["initial"]["reference"]["median_us"]
+    for key, value in bench.items():
+        say(f"  {key}: {value['fast']['median_us']:.1f} us (reference implementation {value['reference']['median_us']:.1f} us)")
+
+    if not args.skip_sweep:
+        say(f"reference solutions over [0, {args.t_end}] s")
+        ref = wp.reference(run, args.t_end, args.output_step)
+        report["reference"] = ref.summary()
+        say(f"  comparable window [0, {ref.window:.4g}] s; check vs reference: {ref.agreement}")
+        tolerances = wp.TOLERANCES if not args.quick else (1e-4, 1e-6, 1e-8)
+        steps = wp.STEP_SIZES if not args.quick else {k: v[:2] for k, v in wp.STEP_SIZES.items()}
+        cases = wp.sweep_cases(methods, tolerances, steps)
+
+        def progress(row):
+            e = row["errors"]
+            say(
+                f"  {row['label']:28s} {('ok' if row['status'] == 0 else row['cause']):>22s} cpu {row['cpu_time']:7.2f} s "
+                f"steps {row['steps']:7d} rhs {row['rhs_calls']:8d} ee {e['ee']:.2e} peak {e['peak_force']:.2e} energy {e['energy']:.2e}"
+            )
+
+        rows = wp.run_sweep(run, ref, cases, args.t_end, args.output_step, progress)
+        report["runs"] = rows
+        best = wp.cheapest_accurate(rows)
+        report["cheapest_accurate"] = best and {k: best[k] for k in ("label", "options", "cpu_time", "steps", "rhs_calls", "errors")}
+        wp.plot(rows, ref, args.t_end, out / "work_precision.png", f"Work-precision, scene {name}")
+        say(f"cheapest at engineering accuracy: {best and best['label']}")
+
+    if not args.skip_stability and run.dynamics.contacts:
+        say("stability: step size against contact stiffness")
+        if args.quick:
+            stiff = stability.stiffness_map(args.scene, scales=(0.1, 1.0, 10.0), steps=(5e-5, 1e-5, 2e-6), t_end=0.015, progress=say)
+        else:
+            stiff = stability.stiffness_map(args.scene, progress=say)
+        stability.plot_stiffness(stiff, out / "stability_stiffness.png")
+        say("stability: hidden contact onsets")
+        hidden_t = 0.1 if not args.quick else 0.03
+        # peaks and onsets of a tight run over the same horizon (DOP853, rtol 1e-10)
+        tight = simulate(run, wp.CHECK, hidden_t, label="hidden-contact reference")
+        reference_peaks, reference_onsets = tight.peaks, tight.n_events
+        hidden = stability.hidden_contact_map(
+            run,
+            methods=("RK23", "RK45", "DOP853", "LSODA", "BDF") if not args.quick else ("RK45", "LSODA"),
+            tolerances=(1e-2, 1e-3, 1e-4, 1e-5, 1e-6) if not args.quick else (1e-2, 1e-4),
+            t_end=hidden_t,
+            reference_peaks=reference_peaks,
+            reference_onsets=reference_onsets,
+            progress=say,
+        )
+        stability.plot_hidden(hidden, out / "stability_hidden_contacts.png")
+        report.setdefault("stability", {})["stiffness"] = stiff
+        report["stability"]["hidden_contacts"] = hidden
+    if not args.skip_stability:
+        say("stability: Baumgarte gains (ideal mechanism)")
+        if args.quick:
+            gains = stability.baumgarte_map(alphas=(0.0, 5.0, 100.0), betas=(0.0, 5.0, 100.0), cases=(("RK45", 1e-6, None), ("RK4", None, 2e-3)), t_end=0.3, progress=say)
+        else:
+            gains = stability.baumgarte_map(alphas=(0.0, 1.0, 5.0, 20.0, 100.0, 1000.0), betas=(0.0, 1.0, 5.0, 20.0, 100.0, 1000.0), t_end=0.5, progress=say)
+        stability.plot_baumgarte(gains, out / "stability_baumgarte.png")
+        report.setdefault("stability", {})["baumgarte"] = gains
+
+    if args.realtime_t_end > 0:
+        say(f"real-time run: the scene's solver over [0, {args.realtime_t_end}] s")
+        real = speed.realtime(run, run.scene.solver, args.realtime_t_end)
+        report["realtime"] = real
+        report["realtime_factor"] = real["realtime_factor"]
+        say(f"  wall {real['wall_time']:.1f} s for {real['t_reached']:.3g} s simulated: factor {real['realtime_factor']:.2f}, {real['rhs_us_in_run']:.1f} us per rhs in the run")
+
+    path = atomic_write_text(out / "work_precision.json", json.dumps(_clean(report), indent=1, default=_json_default))
+    say(f"wrote {path}")
+    return 0
+
+
+if __name__ == "__main__":
+    exit_on_error(main)

@@ -1,0 +1,323 @@
+"""The fast right-hand side equals the reference computations; the added integrators work.
+
+* ``ConstraintKernel`` (views, one Jacobian call, float 3-vectors) = ``residual``,
+  ``jacobian``, ``gamma`` of ``robot.constraints``, for spherical-only, mixed and
+  revolute-only constraint sets;
+* ``state_derivative`` (table drive, contact laws skipped out of contact,
+  tangent map) = the reference composition, in and out of contact;
+* ``evaluate``, ``configuration_rate``, ``contact_probe`` = their reference forms;
+* the drive table = the exact drive, and falls back to it where it cannot fit;
+* generalized-alpha: second order, Newmark conserves the energy of an oscillator,
+  Lie-group update of quaternions; CVODE through scikit-sundae (if installed).
+"""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import numpy as np
+import pinocchio as pin
+import pytest
+
+from clearance_contact import ContactError
+from robot import constraints as C
+from robot import dynamics as D
+from robot import integrators as I
+from robot.mechanism import build_mechanism
+from robot.run import build_run
+from robot.scene import misalignment_rotation
+from robot.simulation import RECORD_OUTPUT, SolverOptions, integrate
+from robot.studies.speed import reference_state_derivative
+
+DATA = Path(__file__).resolve().parent / "data"
+LWA = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
+
+
+@pytest.fixture(scope="module")
+def misaligned():
+    return build_run("compound_misaligned")
+
+
+def _random_states(run, rng, n):
+    dynamics = run.dynamics
+    model = dynamics.mechanism.model
+    nq, nv = dynamics.nq, dynamics.nv
+    base = run.y0 if run.y0.shape[0] == nq + nv + 2 else np.concatenate([run.y0, [0.0, 0.0]])
+    for _ in range(n):
+        y = base.copy()
+        y[:nq] = pin.integrate(model, y[:nq], 10 ** rng.uniform(-7, -3.5) * rng.standard_normal(nv))
+        y[nq : nq + nv] += 0.05 * rng.standard_normal(nv)
+        yield float(rng.uniform(0.0, 2.0)), y, 10 ** rng.uniform(-3, 0, dynamics.n_candidates)
+
+
+def _kernel_matches_reference(constraints, q_states, rng):
+    model = constraints.mechanism.model
+    data, reference = model.createData(), model.createData()
+    kernel = C.ConstraintKernel(constraints, data)
+    n_drive = constraints.mechanism.n_actuators if constraints.driven else 0
+    for q in q_states:
+        v = rng.standard_normal(model.nv)
+        s, sd, sdd = (rng.standard_normal(n_drive) for _ in range(3)) if n_drive else (None, None, None)
+        for d in (data, reference):
+            pin.computeAllTerms(model, d, q, v)
+            pin.updateFramePlacements(model, d)
+        phi, gam = kernel.update(q, s, sdd)
+        np.testing.assert_allclose(phi, C.residual(constraints, reference, q, s), rtol=0, atol=1e-14)
+        np.testing.assert_allclose(kernel.phi_q, C.jacobian(constraints, model, reference), rtol=0, atol=1e-13)
+        np.testing.assert_allclose(gam, C.gamma(constraints, model, reference, sdd), rtol=1e-12, atol=1e-12)
+        np.testing.assert_allclose(kernel.residual(q, s), phi, rtol=0, atol=0)
+        two_alpha, beta2 = 7.0, 30.0
+        expected = two_alpha * (kernel.phi_q @ v - C.velocity_rhs(constraints, sd)) + beta2 * phi - gam
+        np.testing.assert_allclose(kernel.stabilised_drift(q, v, s, sd, sdd, two_alpha, beta2), expected, rtol=1e-12, atol=1e-11)
+
+
+def test_constraint_kernel_spherical_closures_equal_reference(misaligned):
+    rng = np.random.default_rng(0)
+    model = misaligned.mechanism.model
+    states = [pin.integrate(model, misaligned.y0[: model.nq], 0.05 * rng.standard_normal(model.nv)) for _ in range(5)]
+    _kernel_matches_reference(misaligned.dynamics.constraints, states, rng)
+
+
+def test_constraint_kernel_mixed_rows_equal_reference(misaligned):
+    """Centring rows: a spherical and a revolute site (with a rotation offset) after the closures."""
+    mechanism = misaligned.mechanism
+    constraints = C.constraint_set(mechanism, driven=True, centre_clearance=True, misalignment={"R1": misalignment_rotation(-0.5)})
+    assert any(r.closure.kind == "revolute" for r in constraints.closures)
+    rng = np.random.default_rng(1)
+    states = [pin.integrate(mechanism.model, misaligned.y0[: mechanism.model.nq], 0.05 * rng.standard_normal(mechanism.model.nv)) for _ in range(5)]
+    _kernel_matches_reference(constraints, states, rng)
+
+
+def test_constraint_kernel_revolute_closure_equal_reference():
+    mechanism = build_mechanism(DATA / "slider_crank.urdf")
+    constraints = C.constraint_set(mechanism, driven=True)
+    rng = np.random.default_rng(2)
+    states = [pin.randomConfiguration(mechanism.model, -np.ones(mechanism.model.nq), np.ones(mechanism.model.nq)) for _ in range(5)]
+    _kernel_matches_reference(constraints, states, rng)
+
+
+def test_state_derivative_equals_reference_in_and_out_of_contact(misaligned):
+    dynamics = misaligned.dynamics
+    workspace = D.make_workspace(dynamics)
+    data = dynamics.mechanism.model.createData()
+    rng = np.random.default_rng(3)
+    touched = 0
+    for t, y, onset in _random_states(misaligned, rng, 80):
+        try:
+            expected = reference_state_derivative(dynamics, data, t, y, onset)
+        except ContactError:
+            with pytest.raises(ContactError):
+                D.state_derivative(dynamics, workspace, t, y, onset)
+            continue
+        got = D.state_derivative(dynamics, workspace, t, y, onset)
+        touched += bool(expected[-1] != 0.0)
+        np.testing.assert_allclose(got, expected, rtol=1e-11, atol=1e-9 * max(1.0, np.max(np.abs(expected))))
+    assert touched >= 10  # the sample has states in contact (contact power non-zero)
+
+
+def test_state_derivative_contact_hint_does_not_change_the_result(misaligned):
+    """A site flagged 'touching' from the previous call but now out of contact gets no force."""
+    dynamics = misaligned.dynamics
+    workspace = D.make_workspace(dynamics)
+    y = np.concatenate([misaligned.y0, [0.0, 0.0]])
+    onset = np.full(dynamics.n_candidates, 0.1)
+    cold = D.state_derivative(dynamics, workspace, 0.0, y, onset)
+    for views in workspace.sites:
+        views.touching = True
+    np.testing.assert_array_equal(D.state_derivative(dynamics, workspace, 0.0, y, onset), cold)
+
+
+def test_evaluate_and_probe_equal_reference(misaligned):
+    dynamics = misaligned.dynamics
+    model = dynamics.mechanism.model
+    workspace = D.make_workspace(dynamics)
+    rng = np.random.default_rng(4)
+    nq, nv = dynamics.nq, dynamics.nv
+    for t, y, onset in _random_states(misaligned, rng, 20):
+        q = D.normalise_quaternions(dynamics.mechanism, y[:nq])
+        v = y[nq : nq + nv]
+        try:
+            evaluation = D.evaluate(dynamics, workspace, t, q, v, onset)
+        except ContactError:
+            continue
+        data = model.createData()
+        pin.computeAllTerms(model, data, q, v)
+        pin.updateFramePlacements(model, data)
+        s, sd, sdd = dynamics.drive.drive(t)
+        np.testing.assert_allclose(evaluation.residual, C.residual(dynamics.constraints, data, q, s), atol=1e-14)
+        expected_rate = C.jacobian(dynamics.constraints, model, data) @ v - C.velocity_rhs(dynamics.constraints, sd)
+        np.testing.assert_allclose(evaluation.residual_rate, expected_rate, atol=1e-12)
+        reference = reference_state_derivative(dynamics, model.createData(), t, y, onset)
+        np.testing.assert_allclose(evaluation.qdd, reference[nq : nq + nv], rtol=1e-11, atol=1e-8)
+        pen, rate, worst = D.contact_probe(dynamics, workspace, t, q, v, onset)
+        pin.forwardKinematics(model, data, q, v)
+        pin.updateFramePlacements(model, data)
+        for contact in dynamics.contacts:
+            result = contact.law.evaluate(*D.element_states(data, model, contact.site), onset[contact.candidates])
+            np.testing.assert_allclose(pen[contact.candidates], result.penetration, atol=1e-18)
+            np.testing.assert_allclose(rate[contact.candidates], result.penetration_rate, atol=1e-15)
+        table_s = D.make_workspace(dynamics).drive(t)[0]
+        assert worst == pytest.approx(np.max(np.abs(C.residual(dynamics.constraints, data, q, table_s))), abs=1e-15)
+
+
+def test_configuration_rate_is_the_quaternion_kinematics(misaligned):
+    dynamics = misaligned.dynamics
+    workspace = D.make_workspace(dynamics)
+    rng = np.random.default_rng(5)
+    model = dynamics.mechanism.model
+    q = pin.integrate(model, misaligned.y0[: dynamics.nq], 0.3 * rng.standard_normal(dynamics.nv))
+    v = rng.standard_normal(dynamics.nv)
+    qdot = D.configuration_rate(dynamics, workspace, q, v)
+    np.testing.assert_array_equal(qdot[workspace.simple_q], v[workspace.simple_v])
+    for iq, iv in dynamics.mechanism.free_flyers:
+        x, y, z, w = q[iq + 3 : iq + 7]
+        rotation = pin.Quaternion(w, x, y, z).toRotationMatrix()
+        omega = v[iv + 3 : iv + 6]
+        np.testing.assert_allclose(qdot[iq : iq + 3], rotation @ v[iv : iv + 3], atol=1e-14)
+        np.testing.assert_allclose(qdot[iq + 3 : iq + 6], 0.5 * (w * omega + np.cross([x, y, z], omega)), atol=1e-14)
+        assert qdot[iq + 6] == pytest.approx(-0.5 * np.dot([x, y, z], omega), abs=1e-14)
+
+
+def test_drive_table_equals_the_exact_drive(misaligned):
+    drive = misaligned.dynamics.drive
+    table = D.DriveTable(drive)
+    for t in np.linspace(-0.01, 2.2, 301):
+        for got, exact in zip(table(t), drive.drive(t)):
+            np.testing.assert_allclose(got, exact, rtol=0, atol=1e-12 * max(1.0, np.max(np.abs(exact))))
+    assert table.exact_segments == 0
+    assert D.drive_table(drive) is D.drive_table(drive)  # shared by the workspaces of one drive
+
+
+def test_drive_table_falls_back_where_it_cannot_fit():
+    class Kink:
+        def drive(self, t):
+            value = np.array([abs(t - 0.1)])
+            return value, np.sign(value), np.zeros(1)
+
+    kink = Kink()
+    table = D.DriveTable(kink)
+    assert table(0.1 + 1e-3)[0][0] == pytest.approx(1e-3, abs=1e-15)  # exact in the segment of the kink
+    assert table.exact_segments == 1
+    assert table(0.5)[0][0] == pytest.approx(0.4, abs=1e-13)  # smooth elsewhere: interpolated
+    assert table.exact_segments == 1
+
+
+def test_output_grid_records_the_dense_output(misaligned):
+    options = SolverOptions("RK45", rtol=1e-7, atol=1e-9, output_step=1e-3)
+    trajectory = integrate(misaligned.dynamics, misaligned.y0, (0.0, 0.01), options)
+    assert trajectory.success
+    grid = trajectory.t[trajectory.kind == RECORD_OUTPUT]
+    np.testing.assert_allclose(grid, np.arange(1, 11) * 1e-3, atol=1e-15)
+
+
+# ------------------------------------------------------------------ integrators on small problems
+
+
+def _oscillator(omega=2.0):
+    """q'' = -omega^2 q as y = [q, v, energy-work] with the second-order structure."""
+
+    def fun(t, y):
+        return np.array([y[1], -(omega**2) * y[0], 0.0])
+
+    structure = I.SecondOrderStructure(1, 1, lambda q, dq: q + dq)
+    return fun, structure
+
+
+def _final(solver):
+    while solver.status == "running":
+        solver.step()
+    return solver
+
+
+@pytest.mark.parametrize("method", ["GenAlpha", "Newmark"])
+def test_generalized_alpha_is_second_order(method):
+    fun, structure = _oscillator()
+    errors = []
+    for h in (0.02, 0.01, 0.005):
+        solver = _final(I.make_solver(method, fun, 0.0, np.array([1.0, 0.0, 0.0]), 2.0, 1e-10, 1e-12, np.inf, h, structure))
+        assert solver.status == "finished"
+        errors.append(abs(solver.y[0] - math.cos(4.0)))
+    orders = np.log2(np.array(errors[:-1]) / np.array(errors[1:]))
+    assert np.all(orders > 1.8), orders
+
+
+def test_newmark_conserves_the_oscillator_energy_and_gen_alpha_damps_it():
+    fun, structure = _oscillator(omega=50.0)  # h omega = 5: the high-frequency regime
+    energies = {}
+    for method in ("Newmark", "GenAlpha"):
+        solver = _final(I.make_solver(method, fun, 0.0, np.array([1.0, 0.0, 0.0]), 2.0, 1e-12, 1e-14, np.inf, 0.1, structure))
+        energies[method] = 0.5 * solver.y[1] ** 2 + 0.5 * 50.0**2 * solver.y[0] ** 2
+    initial = 0.5 * 50.0**2
+    assert energies["Newmark"] == pytest.approx(initial, rel=1e-8)
+    assert energies["GenAlpha"] < 0.5 * initial  # rho_inf = 0.8 damps the unresolved frequency
+
+
+def test_generalized_alpha_updates_quaternions_on_the_group():
+    """A free body spinning at constant rate: the quaternion stays unit and matches the exact rotation."""
+    model = pin.Model()
+    model.addJoint(0, pin.JointModelFreeFlyer(), pin.SE3.Identity(), "free")
+    omega = np.array([0.3, -1.2, 2.0])
+
+    def fun(t, y):
+        out = np.zeros(7 + 6)
+        out[:7] = pin.tangentMapProduct(model, y[:7], y[7:13].reshape(-1, 1)).ravel()
+        return out  # no acceleration: constant body twist
+
+    structure = I.SecondOrderStructure(7, 6, lambda q, dq: pin.integrate(model, q, dq))
+    y0 = np.concatenate([pin.neutral(model), [0.1, 0.0, 0.0], omega])
+    solver = _final(I.make_solver("GenAlpha", fun, 0.0, y0, 1.0, 1e-10, 1e-12, np.inf, 0.01, structure))
+    q = solver.y[:7]
+    assert np.linalg.norm(q[3:7]) == pytest.approx(1.0, abs=1e-14)
+    expected = pin.integrate(model, pin.neutral(model), np.concatenate([[0.1, 0.0, 0.0], omega]))
+    np.testing.assert_allclose(q, expected, atol=1e-10)
+
+
+def test_generalized_alpha_matches_rk45_on_the_ideal_mechanism():
+    run = build_run("ideal")
+    reference = integrate(run.dynamics, run.y0, (0.0, 0.2), SolverOptions("RK45", rtol=1e-10, atol=1e-12))
+    gaps = []
+    for h in (2e-3, 1e-3):
+        trajectory = integrate(run.dynamics, run.y0, (0.0, 0.2), SolverOptions("GenAlpha", rtol=1e-10, atol=1e-12, first_step=h))
+        assert trajectory.success, trajectory.message
+        gaps.append(np.max(np.abs(trajectory.y[-1, : run.dynamics.nq] - reference.y[-1, : run.dynamics.nq])))
+    assert gaps[1] < gaps[0] / 3.0  # second order
+    assert gaps[1] < 1e-5
+
+
+def test_fixed_step_methods_need_a_step():
+    fun, structure = _oscillator()
+    for method in ("RK4", "GenAlpha"):
+        with pytest.raises(ValueError, match="first_step"):
+            I.make_solver(method, fun, 0.0, np.array([1.0, 0.0, 0.0]), 1.0, 1e-6, 1e-9, np.inf, None, structure)
+    with pytest.raises(ValueError, match="not on offer"):
+        I.make_solver("Euler", fun, 0.0, np.array([1.0, 0.0, 0.0]), 1.0, 1e-6, 1e-9, np.inf, None)
+
+
+cvode = pytest.mark.skipif("CVODE_BDF" not in I.METHODS, reason="scikit-sundae is not installed")
+
+
+@cvode
+@pytest.mark.parametrize("method", ["CVODE_BDF", "CVODE_Adams"])
+def test_cvode_steps_interpolates_and_continues(method):
+    fun, _ = _oscillator(omega=1.0)
+    solver = I.make_solver(method, fun, 0.0, np.array([1.0, 0.0, 0.0]), 3.0, 1e-10, 1e-12, np.inf, None)
+    times = []
+    while solver.status == "running":
+        solver.step()
+        times.append(solver.t)
+        if len(times) > 5 and solver.status == "running":
+            dense = solver.dense_output()
+            middle = 0.5 * (solver.t_old + solver.t)
+            assert dense(middle)[0] == pytest.approx(math.cos(middle), abs=1e-7)
+    assert np.all(np.diff(times) > 0)  # every step advances, also after an interpolation
+    assert solver.t == 3.0
+    assert solver.y[0] == pytest.approx(math.cos(3.0), abs=1e-7)
+
+
+@cvode
+def test_cvode_runs_a_scene_with_contact_events(misaligned):
+    trajectory = integrate(misaligned.dynamics, misaligned.y0, (0.0, 0.01), SolverOptions("CVODE_BDF", rtol=1e-7, atol=1e-9))
+    assert trajectory.success, trajectory.message
+    assert trajectory.n_events > 0
+    assert trajectory.n_rejected == -1  # CVODE does not tell
