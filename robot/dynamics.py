@@ -450,10 +450,8 @@ def penetrations(dynamics: DynamicsModel, workspace: DynamicsWorkspace, q: np.nd
     model, data = dynamics.mechanism.model, workspace.data
     pin.framesForwardKinematics(model, data, q)
     out = np.empty(dynamics.n_candidates)
-    for contact in dynamics.contacts:
-        site = contact.site
-        outer, inner = data.oMf[site.outer_frame], data.oMf[site.inner_frame]
-        out[contact.candidates] = contact.law.penetration(outer.rotation, outer.translation, inner.rotation, inner.translation)
+    for contact, views in zip(dynamics.contacts, workspace.sites):
+        out[contact.candidates] = contact.law.penetration(views.outer_rotation, views.outer_position, views.inner_rotation, views.inner_position)
     return out
 
 

@@ -90,10 +90,16 @@ def main() -> int:
     def say(text: str) -> None:
         print(f"[{time.perf_counter() - started:7.1f} s] {text}", flush=True)
 
-    report: dict = {
+    json_path = out / "work_precision.json"
+    # phases can be run separately (--skip-*): what this invocation computes replaces the
+    # same keys of an existing report of the scene, the rest is kept
+    report: dict = json.loads(json_path.read_text()) if json_path.is_file() else {}
+
+    def save() -> None:
+        atomic_write_text(json_path, json.dumps(_clean(report), indent=1, default=_json_default))
+
+    report |= {
         "scene": name,
-        "t_end": args.t_end,
-        "output_step": args.output_step,
         "machine": {
             "python": platform.python_version(),
             "numpy": np.__version__,
@@ -101,7 +107,7 @@ def main() -> int:
             "processor": platform.processor() or platform.machine(),
             "note": "shared 2-core machine: CPU times are process_time of the integration only; medians where repeated",
         },
-        "scene_solver": {
+        "scene_solver": {  # the scene's [solver] table when this report was written
             "method": run.scene.solver.method,
             "rtol": run.scene.solver.rtol,
             "atol": run.scene.solver.atol,
@@ -118,7 +124,10 @@ def main() -> int:
     for key, value in bench.items():
         say(f"  {key}: {value['fast']['median_us']:.1f} us (reference implementation {value['reference']['median_us']:.1f} us)")
 
+    save()
     if not args.skip_sweep:
+        report["t_end"] = args.t_end
+        report["output_step"] = args.output_step
         say(f"reference solutions over [0, {args.t_end}] s")
         ref = wp.reference(run, args.t_end, args.output_step)
         report["reference"] = ref.summary()
@@ -138,8 +147,9 @@ def main() -> int:
         report["runs"] = rows
         best = wp.cheapest_accurate(rows)
         report["cheapest_accurate"] = best and {k: best[k] for k in ("label", "options", "cpu_time", "steps", "rhs_calls", "errors")}
-        wp.plot(rows, ref, args.t_end, out / "work_precision.png", f"Work-precision, scene {name}")
+        wp.plot(rows, report["reference"], args.t_end, out / "work_precision.png", f"Work-precision, scene {name}")
         say(f"cheapest at engineering accuracy: {best and best['label']}")
+        save()
 
     if not args.skip_stability and run.dynamics.contacts:
         say("stability: step size against contact stiffness")
@@ -165,6 +175,7 @@ def main() -> int:
         stability.plot_hidden(hidden, out / "stability_hidden_contacts.png")
         report.setdefault("stability", {})["stiffness"] = stiff
         report["stability"]["hidden_contacts"] = hidden
+        save()
     if not args.skip_stability:
         say("stability: Baumgarte gains (ideal mechanism)")
         if args.quick:
@@ -173,6 +184,7 @@ def main() -> int:
             gains = stability.baumgarte_map(alphas=(0.0, 1.0, 5.0, 20.0, 100.0, 1000.0), betas=(0.0, 1.0, 5.0, 20.0, 100.0, 1000.0), t_end=0.5, progress=say)
         stability.plot_baumgarte(gains, out / "stability_baumgarte.png")
         report.setdefault("stability", {})["baumgarte"] = gains
+        save()
 
     if args.realtime_t_end > 0:
         say(f"real-time run: the scene's solver over [0, {args.realtime_t_end}] s")
@@ -181,8 +193,8 @@ def main() -> int:
         report["realtime_factor"] = real["realtime_factor"]
         say(f"  wall {real['wall_time']:.1f} s for {real['t_reached']:.3g} s simulated: factor {real['realtime_factor']:.2f}, {real['rhs_us_in_run']:.1f} us per rhs in the run")
 
-    path = atomic_write_text(out / "work_precision.json", json.dumps(_clean(report), indent=1, default=_json_default))
-    say(f"wrote {path}")
+    save()
+    say(f"wrote {json_path}")
     return 0
 
 

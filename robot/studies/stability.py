@@ -48,7 +48,7 @@ def _cause(outcome) -> str:
 
 def stiffness_map(
     scene: str,
-    scales=(0.01, 0.1, 1.0, 10.0, 100.0, 1000.0),
+    scales=(0.1, 1.0, 10.0, 100.0, 1000.0),
     steps=(1e-3, 3e-4, 1e-4, 3e-5, 1e-5, 3e-6, 1e-6),
     methods=("RK4", "GenAlpha"),
     t_end: float = 0.03,

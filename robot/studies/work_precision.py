@@ -165,17 +165,17 @@ def cheapest_accurate(rows: list[dict]) -> dict | None:
     return min(good, key=lambda r: r["cpu_time"]) if good else None
 
 
-def plot(rows: list[dict], ref: Reference, t_end: float, path, title: str) -> None:
-    """Error against CPU time, one line per method (four error measures)."""
+def plot(rows: list[dict], ref: dict, t_end: float, path, title: str) -> None:
+    """Error against CPU time, one line per method (four error measures); ``ref`` is :meth:`Reference.summary`."""
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
     panels = [
-        ("ee", f"end-effector position error (m), pointwise on [0, {ref.window:.3g}] s", EE_TARGET),
+        ("ee", f"end-effector position error (m), pointwise on [0, {ref['comparable_window_s']:.3g}] s", EE_TARGET),
         ("peak_force", f"peak contact force error (relative), max over joints, [0, {t_end:g}] s", PEAK_TARGET),
-        ("driving", f"driving force error (relative), pointwise on [0, {ref.window:.3g}] s", None),
+        ("driving", f"driving force error (relative), pointwise on [0, {ref['comparable_window_s']:.3g}] s", None),
         ("energy", f"energy balance error (J), [0, {t_end:g}] s", None),
     ]
     methods = []
@@ -207,8 +207,8 @@ def plot(rows: list[dict], ref: Reference, t_end: float, path, title: str) -> No
         ax.grid(True, which="both", alpha=0.3)
     axes[0, 0].legend(fontsize=8, ncol=2)
     fig.suptitle(
-        f"{title}\nPointwise errors only while trajectories are comparable ([0, {ref.window:.3g}] s: the two references agree to "
-        f"{ref.window_tolerance:g} m); after that impacts separate them and runs are compared by peaks, impulses and energy "
+        f"{title}\nPointwise errors only while trajectories are comparable ([0, {ref['comparable_window_s']:.3g}] s: the two references agree to "
+        f"{ref['window_tolerance_m']:g} m); after that impacts separate them and runs are compared by peaks, impulses and energy "
         f"over [0, {t_end:g}] s. x: failed run. Dotted: engineering target.",
         fontsize=9,
     )

@@ -16,12 +16,13 @@ Newton-Euler method. This package does both:
   and the initial state (mapped from Pinocchio coordinates to absolute ones).
 * :mod:`.exudyn_model`: the same mechanism built in Exudyn (an independent C++
   multibody code, the role ADAMS plays in the paper): rigid bodies with Euler
-  parameters, generic joints, prescribed actuator lengths through joint offset
-  user functions, the clearance contact as a user-function force element calling
-  ``clearance_contact``; implicit generalized-alpha integration.
+  parameters, generic joints, the prescribed actuator lengths as distance
+  constraints reset at every step, the clearance contact as a user-function
+  force element calling ``clearance_contact``; implicit generalized-alpha
+  integration.
 * :mod:`.comparison` computes the deviations and statistics,
-  :mod:`.study` runs the scenes, writes ``validation.json`` and the figures
-  (``scripts/validate.py``).
+  :mod:`.figures` draws them, :mod:`.study` runs the scenes and writes
+  ``validation.json`` and the figures (``scripts/validate.py``).
 
 See ``docs/validation.md`` for the equations, the settings and the numbers.
 """

@@ -48,6 +48,7 @@ class EngineSeries:
     message: str = ""
     ee_ideal: np.ndarray | None = None  # (n, 3) prescribed platform position at t
     integration_time: float = float("nan")  # wall time of the time integration alone
+    penetration: dict = field(default_factory=dict)  # site -> (n,) deepest penetration over the candidates
 
     @property
     def first_onset(self) -> float:
@@ -80,13 +81,16 @@ def statistics(series: EngineSeries, duration: float) -> dict:
         if np.isfinite(series.first_onset):
             window = (series.t >= series.first_onset) & (series.t <= series.first_onset + FIRST_IMPACT_WINDOW)
             entry["first_impact_peak_N"] = float(np.nanmax(force[window])) if np.any(window) else 0.0
+            if site in series.penetration:
+                entry["first_impact_max_penetration_m"] = float(max(0.0, np.nanmax(series.penetration[site][window]))) if np.any(window) else 0.0
         sites[site] = entry
     out["contact"] = sites
     return out
 
 
-def relative_difference(value: float, reference: float) -> float | None:
-    if value is None or reference is None or not np.isfinite(value) or not np.isfinite(reference) or reference == 0:
+def relative_difference(value: float, reference: float, floor: float = 0.0) -> float | None:
+    """(value - reference) / |reference|; None when undefined or |reference| <= floor (round-off level)."""
+    if value is None or reference is None or not np.isfinite(value) or not np.isfinite(reference) or abs(reference) <= floor:
         return None
     return float((value - reference) / abs(reference))
 
@@ -100,10 +104,12 @@ def compare_statistics(stats: dict, reference: dict) -> dict:
     if stats.get("first_onset_s") is not None and reference.get("first_onset_s") is not None:
         out["first_onset_s"] = stats["first_onset_s"] - reference["first_onset_s"]
     if "rms_ee_deviation_from_ideal_m" in stats:
-        out["rms_ee_deviation_from_ideal"] = relative_difference(stats["rms_ee_deviation_from_ideal_m"], reference["rms_ee_deviation_from_ideal_m"])
+        out["rms_ee_deviation_from_ideal"] = relative_difference(
+            stats["rms_ee_deviation_from_ideal_m"], reference["rms_ee_deviation_from_ideal_m"], floor=1e-9
+        )
     for site, entry in stats["contact"].items():
         ref = reference["contact"].get(site, {})
-        out[site] = {key: relative_difference(entry[key], ref.get(key)) for key in entry}
+        out[site] = {key: relative_difference(entry[key], ref.get(key), floor=1e-12) for key in entry}
     return out
 
 

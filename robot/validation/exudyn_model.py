@@ -23,8 +23,9 @@ Model
   ``s_k``); the distance is set to ``s_k(t_{n+1})`` in a pre-step user function
   (Exudyn passes the end time of the step) and enforced at position level
   (index 3) at the end of the step. The driving force is the connector's
-  constraint force, ``driving = -Force`` (Exudyn reports the force on the
-  first marker as positive in tension).
+  constraint force with the sign of ``robot.dynamics`` (positive pushes):
+  ``driving = -Force`` (the sign checked against the Lagrange model).
+  The lengths ``s_k(t)`` come from :func:`actuator_lengths`.
   Why not a ``GenericJoint`` with all six axes locked and an ``offsetUserFunction``
   along z (the documented way to prescribe a joint motion): with the two marker
   points 1.2 m apart the locked translational equations lose rank in Exudyn
@@ -48,15 +49,14 @@ Model
 
 Initial conditions
 ------------------
-Positions and velocities from the Lagrange run's ``y0``; initial accelerations
-from the kinematic acceleration analysis of the mechanism with its clearance
-joints centred (the ideal mechanism, ``robot.kinematics.acceleration_analysis``),
-mapped to COM accelerations and Euler-parameter second derivatives, because
-Exudyn's own ``computeInitialAccelerations`` ignores prescribed constraint
-motion (documented in ``GeneralizedAlphaSettings``) and the generalized-alpha
-start then carries an error of the size of ``M s''``. For the ideal mechanism
-these are the exact accelerations; with clearance joints the detached bodies
-start with the accelerations of the ideal joint.
+Positions and velocities from the Lagrange run's ``y0``. Exudyn's own
+``computeInitialAccelerations`` ignores constraint motion prescribed from
+Python (documented in ``GeneralizedAlphaSettings``): the driving forces then
+start 84 N off and ring for 2 ms. Instead :func:`consistent_accelerations`
+solves the initial acceleration problem with Exudyn's own mass matrix, forces
+and constraint Jacobian, the constraints' acceleration right-hand side (with the
+drivers' ``s''``) taken from the kinematic accelerations of the mechanism with
+its clearance joints centred (:func:`kinematic_accelerations`).
 """
 
 from __future__ import annotations

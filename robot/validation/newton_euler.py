@@ -52,8 +52,6 @@ from dataclasses import dataclass, field
 import numpy as np
 import pinocchio as pin
 
-from clearance_contact import ContactError
-
 from ..mechanism import rotation_z_to
 from ..run import Run
 from .absolute_constraints import BodyStates, ConstraintSet, cross
@@ -459,5 +457,4 @@ __all__ = [
     "evaluate",
     "simulate",
     "NEResult",
-    "ContactError",
 ]

@@ -60,10 +60,11 @@ def lagrange_series(run) -> CMP.EngineSeries:
     result = run_scene(run)
     wall = time.perf_counter() - started
     contact = {site: np.sum(result[f"{site}_normal_force"], axis=1) for site in _sites(run)}
+    penetration = {site: np.max(result[f"{site}_penetration"], axis=1) for site in _sites(run)}
     onsets = result["event_t"][result["event_is_onset"]] if "event_t" in result.arrays else np.zeros(0)
     return CMP.EngineSeries(
         "lagrange", result["t"], result["driving_force"], result["ee_position"], contact, np.unique(onsets), wall, result.success, result.message,
-        integration_time=float(result.counts["wall_time"]),
+        integration_time=float(result.counts["wall_time"]), penetration=penetration,
     )
 
 
@@ -76,9 +77,10 @@ def newton_euler_series(run, t_eval: np.ndarray) -> tuple[CMP.EngineSeries, CMP.
 
     def series(arrays):
         contact = {site: np.sum(arrays[f"{site}_normal_force"], axis=1) for site in sites}
+        penetration = {site: np.max(arrays[f"{site}_penetration"], axis=1) for site in sites}
         return CMP.EngineSeries(
             "newton_euler", arrays["t"], arrays["driving_force"], arrays["ee_position"], contact, onsets, result.wall_time, result.success, result.run.message,
-            integration_time=result.run.wall_time,
+            integration_time=result.run.wall_time, penetration=penetration,
         )
 
     return series(a), series(e)
@@ -87,6 +89,7 @@ def newton_euler_series(run, t_eval: np.ndarray) -> tuple[CMP.EngineSeries, CMP.
 def exudyn_series(run, settings: EX.ExudynSettings) -> CMP.EngineSeries:
     result = EX.simulate(run, settings)
     contact = {site: np.sum(result.contact[site]["normal_force"], axis=1) for site in _sites(run)}
+    penetration = {site: np.max(result.contact[site]["penetration"], axis=1) for site in _sites(run)}
     onsets = []
     for site in _sites(run):
         pen = result.contact[site]["penetration"]
@@ -94,7 +97,7 @@ def exudyn_series(run, settings: EX.ExudynSettings) -> CMP.EngineSeries:
         onsets.extend(result.t[1:][np.any(entering, axis=1)])
     return CMP.EngineSeries(
         "exudyn", result.t, result.driving_force, result.ee_position, contact, np.unique(onsets), result.wall_time, result.success, result.message,
-        integration_time=result.solve_time,
+        integration_time=result.solve_time, penetration=penetration,
     )
 
 
