@@ -183,7 +183,7 @@ class DriveTable:
     integration tolerance. ``exact_segments`` counts the fallbacks.
     """
 
-    def __init__(self, drive: Drive, width: float = 1.0 / 32.0, degree: int = 11, rtol: float = 1e-12, checks: int = 3):
+    def __init__(self, drive: Drive, width: float = 1.0 / 16.0, degree: int = 13, rtol: float = 1e-12, checks: int = 2):
         try:  # a weak reference: the shared tables (drive_table) must not keep their drive alive
             self._drive = weakref.ref(drive)
         except TypeError:

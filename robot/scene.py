@@ -71,7 +71,7 @@ from clearance_contact import (
 
 from .errors import SceneError
 from .simulation import FailureLimits, SolverOptions
-from .integrators import METHODS
+from .integrators import FIXED_STEP_METHODS, METHODS
 from .dynamics import Baumgarte
 
 SCENE_DIR = Path(__file__).resolve().parent / "scenes"
@@ -352,8 +352,8 @@ def load_scene(name_or_path: str | Path, **overrides: Any) -> Scene:
         _number(solver_table, "max_step", w, 1e-3, low=0.0, low_open=True),
         _number(solver_table, "first_step", w, None, low=0.0, low_open=True),
     )
-    if method == "RK4" and solver.first_step is None:
-        raise SceneError(f"{w}: the fixed-step method RK4 needs first_step (its step size)")
+    if method in FIXED_STEP_METHODS and solver.first_step is None:
+        raise SceneError(f"{w}: the fixed-step method {method} needs first_step (its step size)")
     baumgarte_table = _table(data, "baumgarte", where)
     _unknown(baumgarte_table, _BAUMGARTE_KEYS, f"{where} [baumgarte]")
     w = f"{where} [baumgarte]"

@@ -2,7 +2,7 @@
 
     python scripts/work_precision.py [--scene NAME] [--t-end T] [--out DIR]
         [--quick] [--skip-stability] [--skip-sweep] [--realtime-t-end T] [--methods M1,M2]
-        [--tolerances R1,R2] [--steps H1,H2]
+        [--tolerances R1,R2] [--steps H1,H2] [--max-step H] [--candidates M:RTOL,...] [--long-horizon]
 
 Writes to DIR (default results/work_precision/SCENE):
 
@@ -11,7 +11,9 @@ Writes to DIR (default results/work_precision/SCENE):
   cheapest run at engineering accuracy, ``rhs_us`` (microseconds per
   right-hand side, out of contact and in contact, against the reference
   implementation), ``realtime_factor`` (wall time over simulated time of the
-  scene's default solver over ``--realtime-t-end``), the stability maps;
+  scene's default solver over ``--realtime-t-end``, and of the ``--candidates``),
+  with ``--long-horizon`` their statistics against a tight run over that
+  horizon, the stability maps;
 * ``work_precision.png``: error against CPU time, one line per method;
 * ``stability_stiffness.png``, ``stability_baumgarte.png``,
   ``stability_hidden_contacts.png``: the failure maps.
@@ -38,6 +40,7 @@ from robot.atomic import atomic_write_text  # noqa: E402
 from robot.cli import exit_on_error  # noqa: E402
 from robot.integrators import METHODS  # noqa: E402
 from robot.run import build_run  # noqa: E402
+from robot.simulation import SolverOptions  # noqa: E402
 from robot.scene import shipped_scenes  # noqa: E402
 from robot.studies import speed, stability  # noqa: E402
 from robot.studies.common import simulate  # noqa: E402
@@ -74,6 +77,16 @@ def main() -> int:
     parser.add_argument("--skip-sweep", action="store_true", help="no work-precision sweep")
     parser.add_argument("--skip-stability", action="store_true", help="no stability maps")
     parser.add_argument("--realtime-t-end", type=float, default=2.0, help="horizon of the real-time run (0: skip)")
+    parser.add_argument(
+        "--candidates",
+        default="LSODA:1e-6,LSODA:1e-5,RK45:1e-6,CVODE_BDF:1e-6,CVODE_Adams:1e-5",
+        help="other METHOD:RTOL (atol = rtol/100, max_step 1e-3) to time over the real-time horizon ('' for none)",
+    )
+    parser.add_argument(
+        "--long-horizon", action="store_true",
+        help="also compare the scene's solver and the candidates over the real-time horizon against DOP853 rtol 1e-10 "
+        "(peak forces, impulses, energy balance, drift: statistics, the trajectories separate)",
+    )
     parser.add_argument("--methods", default=None, help=f"comma-separated subset of {', '.join(METHODS)}")
     parser.add_argument("--steps", default=None, help="comma-separated step sizes of the fixed-step methods (default: per method)")
     parser.add_argument("--tolerances", default=None, help="comma-separated rtol values of the variable-step methods")
@@ -206,6 +219,33 @@ def main() -> int:
         report["realtime_factor"] = real["realtime_factor"]
         report["rhs_us_in_run"] = real["rhs_us_in_run"]
         say(f"  wall {real['wall_time']:.1f} s for {real['t_reached']:.3g} s simulated: factor {real['realtime_factor']:.2f}, {real['rhs_us_in_run']:.1f} us per rhs in the run")
+        candidates = []
+        for spec in filter(None, args.candidates.split(",")):
+            method, rtol = spec.split(":")
+            if method not in METHODS:
+                say(f"  {method}: not on offer here, skipped")
+                continue
+            candidates.append(SolverOptions(method, rtol=float(rtol), atol=float(rtol) * 1e-2, max_step=1e-3))
+        timed = []
+        for options in candidates:
+            other = speed.realtime(run, options, args.realtime_t_end)
+            timed.append(other)
+            say(f"  {options.method} rtol {options.rtol:g}: factor {other['realtime_factor']:.2f} ({other['rhs_calls']} rhs, {other['status'] == 0 and 'ok' or other['cause']})")
+        report["realtime_candidates"] = timed
+        save()
+        if args.long_horizon:
+            say(f"long horizon: statistics over [0, {args.realtime_t_end}] s against DOP853 rtol 1e-10")
+            tight = simulate(run, SolverOptions("DOP853", rtol=1e-10, atol=1e-12, max_step=1e-3), args.realtime_t_end, label="DOP853 rtol 1e-10")
+            rows = {}
+            for options in [run.scene.solver] + candidates:
+                outcome = simulate(run, options, args.realtime_t_end, label=f"{options.method} rtol {options.rtol:g}")
+                row = outcome.counts()
+                row["peak_force_relative_to_tight"] = {j: outcome.peaks[j] / tight.peaks[j] - 1.0 for j in tight.peaks}
+                row["impulse_relative_to_tight"] = {j: outcome.impulses[j] / tight.impulses[j] - 1.0 for j in tight.impulses}
+                rows[outcome.label] = row
+                say(f"  {outcome.label}: energy {outcome.energy_error:.2e} J, drift {outcome.max_residual:.2e}, impulses {row['impulse_relative_to_tight']}")
+            report["long_horizon"] = {"t_end": args.realtime_t_end, "tight": tight.counts(), "runs": rows}
+            save()
 
     save()
     say(f"wrote {json_path}")

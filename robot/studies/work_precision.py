@@ -207,7 +207,9 @@ def plot(rows: list[dict], ref: dict, t_end: float, path, title: str) -> None:
             y = ax.get_ylim()[0] if ax.lines else 1e-12
             for x, color in floor:
                 ax.plot([x], [y], "x", color=color, markersize=9)
-        if target is not None:
+        if not ax.lines:
+            ax.text(0.5, 0.5, "no data (no clearance joint in the scene)" if key == "peak_force" else "no data", ha="center", va="center", transform=ax.transAxes)
+        elif target is not None:
             ax.axhline(target, color="k", lw=0.8, ls=":")
         ax.set_xlabel("CPU time of the integration (s)")
         ax.set_ylabel(ylabel, fontsize=9)
