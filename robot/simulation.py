@@ -257,7 +257,7 @@ def integrate(
                 if crossing.size or hidden.size:
                     dense = dense_output(solver)
                     for k in crossing:
-                        candidates_t.append((_root(lambda tt: _pen_at(tt, dense, depth_probe, k), t_old, t_new), k))
+                        candidates_t.append((first_contact_time(lambda tt: _pen_at(tt, dense, depth_probe, k), t_old, t_new), k))
                     for k in hidden:
                         found = _hidden_contact(dense, depth_probe, k, t_old, t_new)
                         if found is not None:
@@ -383,7 +383,8 @@ def _pen_at(t: float, dense, probe, k: int) -> float:
     return float(probe(t, dense(t))[0][k])
 
 
-def _root(function, a: float, b: float) -> float:
+def first_contact_time(function, a: float, b: float) -> float:
+    """Time in [a, b] where ``function`` (a penetration) crosses zero upward (Brent's method)."""
     fa, fb = function(a), function(b)
     if fa > 0:
         return a
@@ -397,7 +398,7 @@ def _hidden_contact(dense, probe, k: int, t_old: float, t_new: float, samples: i
     previous = t_old
     for tt in np.linspace(t_old, t_new, samples + 2)[1:-1]:
         if _pen_at(tt, dense, probe, k) > 0:
-            return _root(lambda s: _pen_at(s, dense, probe, k), previous, tt)
+            return first_contact_time(lambda s: _pen_at(s, dense, probe, k), previous, tt)
         previous = tt
     return None
 

@@ -38,6 +38,7 @@ from scipy.integrate import DOP853, RK23, RK45
 from scipy.optimize import brentq
 
 from clearance_contact import ONSET_RATE_FLOOR, ContactError
+from robot.simulation import first_contact_time
 
 SOLVERS = {"RK45": RK45, "RK23": RK23, "DOP853": DOP853}
 RECORD_STEP, RECORD_ONSET, RECORD_PEAK, RECORD_START = 0, 1, 2, 3
@@ -117,13 +118,7 @@ def integrate_with_events(
     def pen_at(dense, tt, k):
         return float(probe(tt, dense(tt), onset)[0][k])
 
-    def root(fun, a, b):
-        fa, fb = fun(a), fun(b)
-        if fa > 0:
-            return a
-        if fb <= 0:
-            return b
-        return brentq(fun, a, b, xtol=1e-15, rtol=4 * np.finfo(float).eps, maxiter=200)
+    root = first_contact_time
 
     def hidden(dense, k, t_old, t_new, samples=8):
         previous = t_old
