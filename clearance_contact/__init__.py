@@ -1,7 +1,11 @@
-"""clearance_contact: contact forces of 3-D clearance joints (numpy only).
+"""clearance_contact: contact forces of 3-D clearance joints (numpy; numba optional).
 
 Poses and velocities in, wrenches out (SI units, world axes); the interface
-contract is ``docs/contact-api.md``.
+contract is ``docs/contact-api.md``.  The laws are compiled with numba when it is
+installed (``CLEARANCE_CONTACT_JIT=0`` disables it); without it the same code runs
+as plain Python.
+
+* :mod:`.compiled`: ``jit``, ``JIT_ENABLED``, the kernels' ``STATUS_*`` codes;
 
 * :mod:`.errors`: ``ContactError``, ``ContactParameterError``;
 * :mod:`.materials`: ``Material`` and Hertz-type stiffnesses;

@@ -13,6 +13,8 @@ from __future__ import annotations
 
 import math
 
+import numpy as np
+
 __all__ = [
     "ContactError",
     "ContactParameterError",
@@ -20,6 +22,8 @@ __all__ = [
     "require_positive",
     "require_non_negative",
     "require_in_range",
+    "state_array",
+    "nonfinite_state_message",
 ]
 
 
@@ -82,3 +86,27 @@ def require_in_range(
         interval = f"{'[' if low_inclusive else '('}{low:g}, {high:g}{']' if high_inclusive else ')'}"
         raise ContactParameterError(f"{name}={value!r} is outside the valid range {interval}")
     return x
+
+
+_FLOAT64 = np.dtype(np.float64)
+
+
+def state_array(name: str, value, shape: tuple) -> np.ndarray:
+    """``value`` as a float64 array of ``shape`` for the compiled kernels, else ValueError.
+
+    A float64 ndarray of the right shape is passed through as is (C or Fortran order,
+    or strided: numba compiles one specialisation per layout); anything else is
+    converted with ``np.asarray``.
+    """
+    if type(value) is np.ndarray and value.dtype is _FLOAT64 and value.shape == shape:
+        return value
+    a = np.asarray(value, dtype=np.float64)
+    if a.shape != shape:
+        raise ValueError(f"{name} must have shape {shape}, got {a.shape}")
+    return a
+
+
+def nonfinite_state_message(names: tuple, values: tuple) -> str:
+    """Message of a ContactError for NaN / inf in a joint state: names the bad arguments."""
+    bad = [f"{n}={np.asarray(v).tolist()!r}" for n, v in zip(names, values) if not np.all(np.isfinite(v))]
+    return f"non-finite input {', '.join(bad)}: check the poses, velocities and onset rates (NaN or inf)"

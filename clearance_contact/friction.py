@@ -36,6 +36,7 @@ from typing import Protocol, runtime_checkable
 import numpy as np
 from numpy.typing import ArrayLike
 
+from .compiled import jit
 from .errors import ContactParameterError, require_non_negative, require_positive
 
 __all__ = [
@@ -44,7 +45,28 @@ __all__ = [
     "BrownMcPheeFriction",
     "CoulombFriction",
     "NoFriction",
+    "FRICTION_NONE",
+    "FRICTION_BROWN_MCPHEE",
+    "FRICTION_COULOMB",
+    "FRICTION_EXTERNAL",
+    "FRICTION_PARAMETERS",
+    "friction_encoding",
+    "brown_mcphee_force_over_speed",
+    "coulomb_force_over_speed",
+    "encoded_force_over_speed",
 ]
+
+# -- encoding of the built-in laws for the compiled kernels ----------------------------
+FRICTION_NONE: int = 0
+"""Kind code of :class:`NoFriction` (parameters unused)."""
+FRICTION_BROWN_MCPHEE: int = 1
+"""Kind code of :class:`BrownMcPheeFriction`; parameters (mu_s, mu_k, v_s, mu_v, F_ref)."""
+FRICTION_COULOMB: int = 2
+"""Kind code of :class:`CoulombFriction`; parameters (mu, v_r, 0, 0, 0)."""
+FRICTION_EXTERNAL: int = 3
+"""Kind code of any other :class:`FrictionLaw` (user-defined): applied in Python by ``evaluate``."""
+FRICTION_PARAMETERS: int = 5
+"""Number of float parameters after the kind code in a kernel parameter array."""
 
 
 @runtime_checkable
@@ -74,6 +96,7 @@ _ZERO_SLIP = 1.0e-300
 returned as 0 (zero slip), so that g stays finite in floating point."""
 
 
+@jit
 def _tanh_over(y: float) -> float:
     """tanh(y) / y for y >= 0, with its limit 1 at y = 0 (series below 1e-4)."""
     if y < 1.0e-4:
@@ -87,6 +110,103 @@ def _vector_force(law: ScalarFrictionLaw, normal_force: float, slip_velocity: Ar
         raise ValueError(f"slip_velocity must have shape (3,), got {v.shape}")
     g = law.force_over_speed(float(normal_force), math.hypot(*v.tolist()))
     return -g * v
+
+
+@jit
+def brown_mcphee_force_over_speed(
+    normal_force: float,
+    slip_speed: float,
+    static_coefficient: float,
+    dynamic_coefficient: float,
+    transition_velocity: float,
+    viscous_coefficient: float,
+    reference_force: float,
+) -> float:
+    """Brown-McPhee g(v) = f(v) / v in N s/m (seed paper eq. (14), module docstring).
+
+    ``g = F_N [4 mu_k tanh(4x)/(4x) + (mu_s - mu_k) / (x^2/4 + 3/4)^2] / v_s
+    + mu_v tanh(4 F_N / F_ref)``, x = v / v_s; finite at v = 0; 0 if F_N <= 0.
+    The one implementation, used by :meth:`BrownMcPheeFriction.force_over_speed`
+    and by the joints' compiled kernels.
+    """
+    if normal_force <= 0.0:
+        return 0.0
+    x = slip_speed / transition_velocity
+    d = 0.25 * x * x + 0.75
+    g = (
+        normal_force
+        * (4.0 * dynamic_coefficient * _tanh_over(4.0 * x) + (static_coefficient - dynamic_coefficient) / (d * d))
+        / transition_velocity
+    )
+    if viscous_coefficient > 0.0:
+        g += viscous_coefficient * math.tanh(4.0 * normal_force / reference_force)
+    return g
+
+
+@jit
+def coulomb_force_over_speed(
+    normal_force: float, slip_speed: float, coefficient: float, regularisation_velocity: float
+) -> float:
+    """Coulomb g = mu F_N / v (sign law, 0 at v <= 1e-300) or mu F_N tanh(v/v_r) / v (N s/m).
+
+    0 if F_N <= 0.  The one implementation, used by
+    :meth:`CoulombFriction.force_over_speed` and by the joints' compiled kernels.
+    """
+    if normal_force <= 0.0:
+        return 0.0
+    v_r = regularisation_velocity
+    if v_r > 0.0:
+        return coefficient * normal_force * _tanh_over(slip_speed / v_r) / v_r
+    if slip_speed <= _ZERO_SLIP:
+        return 0.0
+    return coefficient * normal_force / slip_speed
+
+
+@jit
+def encoded_force_over_speed(parameters, offset: int, normal_force: float, slip_speed: float) -> float:
+    """g of the built-in law encoded at ``parameters[offset:offset + 1 + FRICTION_PARAMETERS]``.
+
+    ``parameters[offset]`` is the kind code (``FRICTION_*``), followed by the law's
+    parameters (:func:`friction_encoding`).  Returns 0 for ``FRICTION_NONE`` and for
+    ``FRICTION_EXTERNAL`` (which the kernels handle before calling this).
+    """
+    code = int(parameters[offset])
+    if code == FRICTION_BROWN_MCPHEE:
+        return brown_mcphee_force_over_speed(
+            normal_force,
+            slip_speed,
+            parameters[offset + 1],
+            parameters[offset + 2],
+            parameters[offset + 3],
+            parameters[offset + 4],
+            parameters[offset + 5],
+        )
+    if code == FRICTION_COULOMB:
+        return coulomb_force_over_speed(normal_force, slip_speed, parameters[offset + 1], parameters[offset + 2])
+    return 0.0
+
+
+def friction_encoding(law: FrictionLaw) -> tuple[int, tuple[float, ...]]:
+    """(kind code, FRICTION_PARAMETERS floats) of a friction law for the compiled kernels.
+
+    Exactly :class:`BrownMcPheeFriction`, :class:`CoulombFriction` and
+    :class:`NoFriction` are encoded (not subclasses, which may override the law);
+    anything else is ``FRICTION_EXTERNAL`` (zeros), applied in Python.
+    """
+    kind = type(law)
+    if kind is BrownMcPheeFriction:
+        return FRICTION_BROWN_MCPHEE, (
+            law.static_coefficient,
+            law.dynamic_coefficient,
+            law.transition_velocity,
+            law.viscous_coefficient,
+            law.reference_force,
+        )
+    if kind is CoulombFriction:
+        return FRICTION_COULOMB, (law.friction_coefficient, law.regularisation_velocity, 0.0, 0.0, 0.0)
+    if kind is NoFriction:
+        return FRICTION_NONE, (0.0,) * FRICTION_PARAMETERS
+    return FRICTION_EXTERNAL, (0.0,) * FRICTION_PARAMETERS
 
 
 @dataclass(frozen=True, slots=True)
@@ -143,18 +263,15 @@ class BrownMcPheeFriction:
 
     def force_over_speed(self, normal_force: float, slip_speed: float) -> float:
         """g(v) = f(v) / v in N s/m for v = slip_speed >= 0; finite at v = 0; 0 if F_N <= 0."""
-        if normal_force <= 0.0:
-            return 0.0
-        v_s = self.transition_velocity
-        x = slip_speed / v_s
-        d = 0.25 * x * x + 0.75
-        g = normal_force * (
-            4.0 * self.dynamic_coefficient * _tanh_over(4.0 * x)
-            + (self.static_coefficient - self.dynamic_coefficient) / (d * d)
-        ) / v_s
-        if self.viscous_coefficient > 0.0:
-            g += self.viscous_coefficient * math.tanh(4.0 * normal_force / self.reference_force)
-        return g
+        return brown_mcphee_force_over_speed(
+            float(normal_force),
+            float(slip_speed),
+            self.static_coefficient,
+            self.dynamic_coefficient,
+            self.transition_velocity,
+            self.viscous_coefficient,
+            self.reference_force,
+        )
 
     def force(self, normal_force: float, slip_velocity: ArrayLike) -> np.ndarray:
         """F_t = -g(|v_t|) v_t, shape (3,)."""
@@ -207,14 +324,9 @@ class CoulombFriction:
 
     def force_over_speed(self, normal_force: float, slip_speed: float) -> float:
         """g = mu F_N / v (sign law, 0 at v = 0) or mu F_N tanh(v/v_r) / v."""
-        if normal_force <= 0.0:
-            return 0.0
-        v_r = self.regularisation_velocity
-        if v_r > 0.0:
-            return self.friction_coefficient * normal_force * _tanh_over(slip_speed / v_r) / v_r
-        if slip_speed <= _ZERO_SLIP:
-            return 0.0
-        return self.friction_coefficient * normal_force / slip_speed
+        return coulomb_force_over_speed(
+            float(normal_force), float(slip_speed), self.friction_coefficient, self.regularisation_velocity
+        )
 
     def force(self, normal_force: float, slip_velocity: ArrayLike) -> np.ndarray:
         """F_t = -mu F_N v_t / |v_t| (sign law) or -g(|v_t|) v_t (regularised), shape (3,)."""

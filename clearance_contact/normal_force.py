@@ -29,6 +29,7 @@ from __future__ import annotations
 import math
 from typing import NamedTuple
 
+from .compiled import jit
 from .errors import require_in_range, require_positive
 
 __all__ = [
@@ -52,6 +53,7 @@ EXPONENT_RANGE: tuple[float, float] = (1.0, 1.5)
 """Valid range of the force exponent n (seed paper: "n ranges from 1 to 3/2")."""
 
 
+@jit
 def hysteresis_factor(restitution: float) -> float:
     """Return the L-N damping factor 3 (1 - c_e^2) / 4 (dimensionless)."""
     return 0.75 * (1.0 - restitution * restitution)
@@ -69,6 +71,7 @@ def validate_normal_law(stiffness: float, exponent: float, restitution: float) -
     return k, n, ce
 
 
+@jit
 def lankarani_nikravesh(
     penetration: float,
     penetration_rate: float,
@@ -83,7 +86,9 @@ def lankarani_nikravesh(
     clamped at >= 0, and exactly 0 when ``penetration <= 0``.
 
     Hot-path function: plain floats, no validation (the joints validate their
-    parameters once at construction with :func:`validate_normal_law`).
+    parameters once at construction with :func:`validate_normal_law`).  Compiled by
+    :data:`~clearance_contact.compiled.jit` and called as is by the joints' compiled
+    kernels: this is the one implementation of the law.
     """
     if penetration <= 0.0:
         return 0.0

@@ -166,6 +166,31 @@ axis) carries a friction torque mu F_N r_s, and a single slip gives the plain la
 one: r_s over-estimates it by 1 % for R_b1/R_b2 = 0.63, 6 % for a full disc.)
 On the journal: f = -F_N n + F_t at P, plus T_spin n; on the bearing the opposite.
 Wrenches are [force, moment about the element's frame origin], world axes.
+
+Compiled kernel (``docs/contact-api.md``)
+----------------------------------------
+:func:`revolute_kernel` (``RevoluteClearanceJoint.kernel``) computes all of the above
+into a flat float64 array ``out`` of ``RevoluteClearanceJoint.output_size = 98``
+values; offsets (class attributes, k = 4 candidates, r = 2 eccentricity rows, (k, 3)
+blocks row-major)::
+
+    PENETRATION 0 (k)    PENETRATION_RATE 4 (k)   NORMAL_FORCE 8 (k)    NORMAL 12 (3k)
+    POINT_OUTER 24 (3k)  POINT_INNER 36 (3k)      FRICTION_FORCE 48 (3k)
+    ECCENTRICITY 60 (3r) WRENCH_OUTER 66 (6)      WRENCH_INNER 72 (6)   KIND 78 (k, as float)
+    internal: CENTROID_DEPTH 82 (k, delta at P's slice), SPIN_RADIUS 86 (k, r_s),
+              SPIN_SPEED 90 (k, w_n r_s), SPIN_TORQUE 94 (k, T_spin)
+
+``kernel_parameters`` (float64, built once per joint)::
+
+    [R_j, R_b1, R_b2, L_b/2, L_j/2, K_line, K_plane / annulus area, n_r, n_a, c_e,
+     friction code, 5 friction parameters, C(n_r, 1..6), 10, disc rule (10 x 4)]
+
+Status (:mod:`~clearance_contact.compiled`): 0 ok, ``STATUS_NONFINITE_INPUT``,
+``STATUS_NONFINITE_PENETRATION``, ``STATUS_AXIS_TILT`` (journal at >= 90 deg), or
+``STATUS_EXTERNAL_FRICTION`` for a user-defined friction law (every call): then
+``friction_force`` holds the tangential slip v_t and ``SPIN_SPEED`` w_n r_s where
+F_N > 0, the wrenches are not written, and :meth:`RevoluteClearanceJoint.evaluate`
+applies the law and calls :func:`revolute_wrenches` (the kernel's own code).
 """
 
 from __future__ import annotations
@@ -175,13 +200,39 @@ import math
 import numpy as np
 from numpy.typing import ArrayLike
 
-from .errors import ContactError, ContactParameterError, require_in_range, require_positive
-from .friction import FrictionLaw, NoFriction
+from .compiled import (
+    STATUS_AXIS_TILT,
+    STATUS_EXTERNAL_FRICTION,
+    STATUS_NONFINITE_INPUT,
+    STATUS_NONFINITE_PENETRATION,
+    STATUS_OK,
+    KernelAttribute,
+    finite_state,
+    norm2,
+    jit,
+)
+from .errors import (
+    ContactError,
+    ContactParameterError,
+    nonfinite_state_message,
+    require_in_range,
+    require_positive,
+    state_array,
+)
+from .friction import (
+    FRICTION_EXTERNAL,
+    FRICTION_NONE,
+    FRICTION_PARAMETERS,
+    FrictionLaw,
+    NoFriction,
+    encoded_force_over_speed,
+    friction_encoding,
+)
 from .materials import Material, cylinder_line_stiffness, flat_punch_stiffness
 from .normal_force import EXPONENT_RANGE, lankarani_nikravesh, validate_normal_law
 from .result import KIND_LINE, KIND_NONE, KIND_PLANE, KIND_POINT, JointContact
 
-__all__ = ["RevoluteClearanceJoint"]
+__all__ = ["RevoluteClearanceJoint", "revolute_kernel", "revolute_penetration_kernel", "revolute_wrenches"]
 
 _MIN_AXIS_COSINE = 1.0e-6
 """Smallest accepted cos(tilt) = u_b . u_j (tilt < 89.99994 deg)."""
@@ -202,9 +253,9 @@ use the quadrature instead of the closed form (whose cancellation grows as angle
 _QUAD_POINTS = 10
 
 
-def _disc_rule(points: int, n: float) -> tuple[tuple[float, float, float, float], ...]:
-    """Nodes of the disc quadrature for the exponent n, phi = pi x:
-    (sin^2(phi/2), cos^2(phi/2), weight * pi/2 sin(phi), sin^2n(phi/2)).
+def _disc_rule(points: int, n: float) -> np.ndarray:
+    """Nodes of the disc quadrature for the exponent n, phi = pi x, as rows
+    (sin^2(phi/2), cos^2(phi/2), weight * pi/2 sin(phi), sin^2n(phi/2)): float64 (points, 4).
 
     x, weight: Gauss-Legendre on [0, 1]; pi/2 sin(phi) is d(sin^2(phi/2))/dx.
     """
@@ -215,9 +266,10 @@ def _disc_rule(points: int, n: float) -> tuple[tuple[float, float, float, float]
     for xi, wi in zip(x.tolist(), w.tolist()):
         sh2 = math.sin(0.5 * math.pi * xi) ** 2
         nodes.append((sh2, math.cos(0.5 * math.pi * xi) ** 2, wi * 0.5 * math.pi * math.sin(math.pi * xi), sh2**n))
-    return tuple(nodes)
+    return np.array(nodes, dtype=np.float64)
 
 
+@jit
 def _x_minus_sin(x: float) -> float:
     """x - sin(x) without cancellation (Taylor series below x = 1)."""
     if x >= 1.0:
@@ -230,13 +282,7 @@ def _x_minus_sin(x: float) -> float:
     return x * x2 / 6.0 * series
 
 
-def _floats(x: ArrayLike) -> list:
-    try:
-        return x.tolist()  # type: ignore[union-attr]
-    except AttributeError:
-        return np.asarray(x, dtype=float).tolist()
-
-
+@jit
 def _line_moments(a: float, b: float, n: float, bn: tuple) -> tuple[float, float, float]:
     """Moments of p(u) = max(a + (b - a) u, 0)^n on u in [0, 1].
 
@@ -283,11 +329,12 @@ def _line_moments(a: float, b: float, n: float, bn: tuple) -> tuple[float, float
     return m0, u_c, m2 / m0 - u_c * u_c
 
 
-def _disc_moments(dc: float, q: float, r: float, n: float, rule: tuple) -> tuple[float, float, float]:
+@jit
+def _disc_moments(dc: float, q: float, r: float, n: float, rule) -> tuple[float, float, float]:
     """Integrals over the disc |x| <= r of p = max(dc + q v, 0)^n, v = x_1 / r, q >= 0.
 
     Returns (D0, D1, D2) = (int p dA, int p x_1 dA, int p |x|^2 dA).  ``rule``:
-    :func:`_disc_rule` for the exponent n.  In the chord
+    :func:`_disc_rule` for the exponent n, float64 (points, 4).  In the chord
     variable v (chord length 2 r sqrt(1 - v^2)), D_k = 2 r^2 int p m_k sqrt(1 - v^2) dv,
     m = 1, r v, r^2 (1 + 2 v^2)/3, over the contact v in [1 - y0, 1] with
     y0 = (dc + q)/q (partial; dc + q is the rim penetration) or y0 = 2 (full disc).
@@ -322,7 +369,9 @@ def _disc_moments(dc: float, q: float, r: float, n: float, rule: tuple) -> tuple
     # smooth in phi at both ends (sqrt and p^n endpoint singularities absorbed)
     w_sum = s_0 = s_1 = s_2 = 0.0
     if full:  # p = dc + q v > 0 everywhere
-        for _, ch2, wj, _ in rule:
+        for i in range(rule.shape[0]):
+            ch2 = rule[i, 1]
+            wj = rule[i, 2]
             omv = 2.0 * ch2  # 1 - v
             v = 1.0 - omv
             wt = wj * math.sqrt(omv * (2.0 - omv))
@@ -332,7 +381,10 @@ def _disc_moments(dc: float, q: float, r: float, n: float, rule: tuple) -> tuple
             s_1 += wp * v
             s_2 += wp * v * v
     else:  # crescent: p = dc + q v = rim sin^2(phi/2) exactly, p^n = rim^n sin^2n(phi/2)
-        for _, ch2, wj, sh2n in rule:
+        for i in range(rule.shape[0]):
+            ch2 = rule[i, 1]
+            wj = rule[i, 2]
+            sh2n = rule[i, 3]
             omv = y0 * ch2
             v = 1.0 - omv
             wt = wj * math.sqrt(omv * (2.0 - omv))
@@ -349,6 +401,545 @@ def _disc_moments(dc: float, q: float, r: float, n: float, rule: tuple) -> tuple
     # uniform pressure (aligned faces) is integrated exactly
     scale = 2.0 * r2 * 0.25 * _x_minus_sin(2.0 * th0) / w_sum
     return scale * s_0, scale * r * s_1, scale * r2 * (s_0 + 2.0 * s_2) / 3.0
+
+
+# -- kernel_parameters layout -----------------------------------------------------------
+_P_JOURNAL_RADIUS = 0
+_P_BORE_RADIUS = 1
+_P_OUTER_RADIUS = 2
+_P_HALF_BEARING_LENGTH = 3
+_P_HALF_JOURNAL_LENGTH = 4
+_P_LINE_STIFFNESS = 5
+_P_PLANE_DENSITY = 6
+_P_RADIAL_EXPONENT = 7
+_P_AXIAL_EXPONENT = 8
+_P_RESTITUTION = 9
+_P_FRICTION = 10  # kind code, then FRICTION_PARAMETERS values
+_P_BINOMIALS = _P_FRICTION + 1 + FRICTION_PARAMETERS  # C(n_r, 1..6)
+_P_QUAD_POINTS = _P_BINOMIALS + 6
+_P_QUAD_RULE = _P_QUAD_POINTS + 1  # _QUAD_POINTS rows of 4 (see _disc_rule)
+_N_PARAMETERS = _P_QUAD_RULE + 4 * _QUAD_POINTS
+
+# -- out layout (k = 4 candidates, r = 2 eccentricity rows) -------------------------------
+_K = 4
+PENETRATION = 0
+PENETRATION_RATE = PENETRATION + _K
+NORMAL_FORCE = PENETRATION_RATE + _K
+NORMAL = NORMAL_FORCE + _K
+POINT_OUTER = NORMAL + 3 * _K
+POINT_INNER = POINT_OUTER + 3 * _K
+FRICTION_FORCE = POINT_INNER + 3 * _K
+ECCENTRICITY = FRICTION_FORCE + 3 * _K
+WRENCH_OUTER = ECCENTRICITY + 3 * 2
+WRENCH_INNER = WRENCH_OUTER + 6
+KIND = WRENCH_INNER + 6
+# internal sections (after the common layout): what the wrenches and a Python friction law need
+CENTROID_DEPTH = KIND + _K
+"""(k) penetration at the centroid: P = point_outer + CENTROID_DEPTH / 2 * normal."""
+SPIN_RADIUS = CENTROID_DEPTH + _K
+"""(k) rms radius r_s of the pressure about P (m)."""
+SPIN_SPEED = SPIN_RADIUS + _K
+"""(k) spin slip speed w_n r_s (m/s), where friction was evaluated."""
+SPIN_TORQUE = SPIN_SPEED + _K
+"""(k) friction torque T_spin about the normal on the journal (N m)."""
+OUTPUT_SIZE = SPIN_TORQUE + _K
+
+
+@jit
+def _slice_penetration(ex: float, ey: float, tx: float, ty: float, beta: float, r_j: float, r_b1: float) -> float:
+    """Radial penetration of the slice with eccentricity (ex, ey); beta = R_j |t|^2 (module docstring)."""
+    ee = ex * ex + ey * ey
+    d = ee + beta * beta
+    s = tx * ex + ty * ey
+    x = (s * s + beta * beta * (tx * tx + ty * ty)) / d if d > 0.0 else 0.0
+    return math.sqrt(ee) + r_j * math.sqrt(1.0 + x) - r_b1
+
+
+@jit
+def _slice_state(z, mx, my, mdx, mdy, tx, ty, tdx, tdy, t_abs, bb, bbd, bbtt, bbtt_dot, r_j, r_b1):
+    """(delta, delta_dot, hx, hy) of the slice z: penetration |e| + R_j sqrt(1 + x) - R_b1,
+    its rate, and the unit eccentricity direction (module docstring), e(z) = m + z t."""
+    ex = mx + z * tx
+    ey = my + z * ty
+    edx = mdx + z * tdx
+    edy = mdy + z * tdy
+    ee = ex * ex + ey * ey
+    e = math.sqrt(ee)
+    if e > 0.0:
+        hx = ex / e
+        hy = ey / e
+        e_dot = hx * edx + hy * edy
+    else:  # on the bearing axis: direction of the tilt, right derivative of |e|
+        if t_abs > 0.0:
+            hx = tx / t_abs
+            hy = ty / t_abs
+        else:
+            hx = 1.0
+            hy = 0.0
+        e_dot = norm2(edx, edy)
+    d = ee + bb
+    if d > 0.0:
+        sp = tx * ex + ty * ey
+        sp_dot = tdx * ex + tdy * ey + tx * edx + ty * edy
+        num = sp * sp + bbtt
+        x = num / d
+        x_dot = ((2.0 * sp * sp_dot + bbtt_dot) * d - 2.0 * num * (ex * edx + ey * edy + bbd)) / (d * d)
+    else:
+        x = 0.0
+        x_dot = 0.0
+    root = math.sqrt(1.0 + x)
+    return e + r_j * root - r_b1, e_dot + 0.5 * r_j * x_dot / root, hx, hy
+
+
+@jit
+def _write3(out, offset, x, y, z):
+    out[offset] = x
+    out[offset + 1] = y
+    out[offset + 2] = z
+
+
+@jit
+def revolute_wrenches(outer_position, inner_position, out):
+    """Write ``out[WRENCH_OUTER:WRENCH_INNER + 6]`` from the forces in ``out`` (module docstring).
+
+    Each candidate with F_N > 0 acts at P = point_outer + delta_c / 2 n: on the journal
+    f = -F_N n + F_t at P plus T_spin n, on the bearing the opposite; moments about each
+    element's frame origin.
+    """
+    pbx = outer_position[0]
+    pby = outer_position[1]
+    pbz = outer_position[2]
+    pjx = inner_position[0]
+    pjy = inner_position[1]
+    pjz = inner_position[2]
+    dpx = pjx - pbx
+    dpy = pjy - pby
+    dpz = pjz - pbz
+    fix = fiy = fiz = 0.0  # force on the journal
+    mix = miy = miz = 0.0  # moment on the journal about o_j
+    mox = moy = moz = 0.0  # moment on the bearing about o_b
+    for k in range(_K):
+        force_n = out[NORMAL_FORCE + k]
+        if force_n <= 0.0:
+            continue
+        nx = out[NORMAL + 3 * k]
+        ny = out[NORMAL + 3 * k + 1]
+        nz = out[NORMAL + 3 * k + 2]
+        half = 0.5 * out[CENTROID_DEPTH + k]
+        rjx = out[POINT_OUTER + 3 * k] + half * nx - pjx  # P - o_j
+        rjy = out[POINT_OUTER + 3 * k + 1] + half * ny - pjy
+        rjz = out[POINT_OUTER + 3 * k + 2] + half * nz - pjz
+        rbx = rjx + dpx  # P - o_b
+        rby = rjy + dpy
+        rbz = rjz + dpz
+        t_spin = out[SPIN_TORQUE + k]
+        fx = -force_n * nx + out[FRICTION_FORCE + 3 * k]
+        fy = -force_n * ny + out[FRICTION_FORCE + 3 * k + 1]
+        fz = -force_n * nz + out[FRICTION_FORCE + 3 * k + 2]
+        tsx = t_spin * nx
+        tsy = t_spin * ny
+        tsz = t_spin * nz
+        fix += fx
+        fiy += fy
+        fiz += fz
+        mix += rjy * fz - rjz * fy + tsx
+        miy += rjz * fx - rjx * fz + tsy
+        miz += rjx * fy - rjy * fx + tsz
+        mox -= rby * fz - rbz * fy + tsx
+        moy -= rbz * fx - rbx * fz + tsy
+        moz -= rbx * fy - rby * fx + tsz
+    _write3(out, WRENCH_OUTER, -fix, -fiy, -fiz)
+    _write3(out, WRENCH_OUTER + 3, mox, moy, moz)
+    _write3(out, WRENCH_INNER, fix, fiy, fiz)
+    _write3(out, WRENCH_INNER + 3, mix, miy, miz)
+
+
+@jit
+def revolute_penetration_kernel(parameters, outer_rotation, outer_position, inner_rotation, inner_position, out):
+    """``out[0:4]`` = deepest penetration (m) of [top_radial, top_axial, bottom_radial, bottom_axial].
+
+    No velocities, no forces (for event functions).  Returns ``STATUS_OK``,
+    ``STATUS_NONFINITE_INPUT`` (non-finite rotations) or ``STATUS_AXIS_TILT``; NaN
+    positions give NaN penetrations with ``STATUS_OK``.
+    """
+    r00 = outer_rotation[0, 0]
+    r01 = outer_rotation[0, 1]
+    r02 = outer_rotation[0, 2]
+    r10 = outer_rotation[1, 0]
+    r11 = outer_rotation[1, 1]
+    r12 = outer_rotation[1, 2]
+    r20 = outer_rotation[2, 0]
+    r21 = outer_rotation[2, 1]
+    r22 = outer_rotation[2, 2]
+    ujx = inner_rotation[0, 2]
+    ujy = inner_rotation[1, 2]
+    ujz = inner_rotation[2, 2]
+    dpx = inner_position[0] - outer_position[0]
+    dpy = inner_position[1] - outer_position[1]
+    dpz = inner_position[2] - outer_position[2]
+    ax = r00 * dpx + r10 * dpy + r20 * dpz
+    ay = r01 * dpx + r11 * dpy + r21 * dpz
+    az = r02 * dpx + r12 * dpy + r22 * dpz
+    dx = r00 * ujx + r10 * ujy + r20 * ujz
+    dy = r01 * ujx + r11 * ujy + r21 * ujz
+    dz = r02 * ujx + r12 * ujy + r22 * ujz
+    if not dz > _MIN_AXIS_COSINE:
+        return STATUS_AXIS_TILT if math.isfinite(dz) else STATUS_NONFINITE_INPUT
+    r_j = parameters[_P_JOURNAL_RADIUS]
+    r_b1 = parameters[_P_BORE_RADIUS]
+    tx = dx / dz
+    ty = dy / dz
+    hl = parameters[_P_HALF_BEARING_LENGTH]
+    mx = ax - az * tx
+    my = ay - az * ty
+    beta = r_j * (tx * tx + ty * ty)
+    d_mid = _slice_penetration(mx, my, tx, ty, beta, r_j, r_b1)
+    d_top = _slice_penetration(mx + hl * tx, my + hl * ty, tx, ty, beta, r_j, r_b1)
+    d_bot = _slice_penetration(mx - hl * tx, my - hl * ty, tx, ty, beta, r_j, r_b1)
+    ad = ax * dx + ay * dy + az * dz
+    base = hl * dz - parameters[_P_HALF_JOURNAL_LENGTH]
+    gr2 = norm2(dx, dy) * parameters[_P_OUTER_RADIUS]
+    out[0] = max(d_mid, d_top)
+    out[1] = (base - ad) + gr2
+    out[2] = max(d_mid, d_bot)
+    out[3] = (base + ad) + gr2
+    return STATUS_OK
+
+
+@jit
+def revolute_kernel(
+    parameters, outer_rotation, outer_position, outer_twist, inner_rotation, inner_position, inner_twist, onset_rates, out
+):
+    """Compiled contact law of the revolute joint (module docstring): state in, ``out`` written, status returned.
+
+    ``parameters``: ``RevoluteClearanceJoint.kernel_parameters``; rotations (3, 3) (C or
+    Fortran order), positions (3,), twists (6,) = [v, w], ``onset_rates`` (4,), all
+    float64; ``out``: float64 (``OUTPUT_SIZE``,), layout in the module docstring.
+    Returns ``STATUS_OK`` (0) or a nonzero ``STATUS_*`` code of
+    :mod:`~clearance_contact.compiled`.
+    """
+    if not finite_state(
+        outer_rotation, outer_position, outer_twist, inner_rotation, inner_position, inner_twist, onset_rates
+    ):
+        return STATUS_NONFINITE_INPUT
+    r00 = outer_rotation[0, 0]
+    r01 = outer_rotation[0, 1]
+    r02 = outer_rotation[0, 2]
+    r10 = outer_rotation[1, 0]
+    r11 = outer_rotation[1, 1]
+    r12 = outer_rotation[1, 2]
+    r20 = outer_rotation[2, 0]
+    r21 = outer_rotation[2, 1]
+    r22 = outer_rotation[2, 2]
+    j00 = inner_rotation[0, 0]
+    j01 = inner_rotation[0, 1]
+    j02 = inner_rotation[0, 2]
+    j10 = inner_rotation[1, 0]
+    j11 = inner_rotation[1, 1]
+    j12 = inner_rotation[1, 2]
+    j20 = inner_rotation[2, 0]
+    j21 = inner_rotation[2, 1]
+    j22 = inner_rotation[2, 2]
+    pbx = outer_position[0]
+    pby = outer_position[1]
+    pbz = outer_position[2]
+    pjx = inner_position[0]
+    pjy = inner_position[1]
+    pjz = inner_position[2]
+    vbx = outer_twist[0]
+    vby = outer_twist[1]
+    vbz = outer_twist[2]
+    wbx = outer_twist[3]
+    wby = outer_twist[4]
+    wbz = outer_twist[5]
+    vjx = inner_twist[0]
+    vjy = inner_twist[1]
+    vjz = inner_twist[2]
+    wjx = inner_twist[3]
+    wjy = inner_twist[4]
+    wjz = inner_twist[5]
+
+    r_j = parameters[_P_JOURNAL_RADIUS]
+    r_b1 = parameters[_P_BORE_RADIUS]
+    r_b2 = parameters[_P_OUTER_RADIUS]
+    hl = parameters[_P_HALF_BEARING_LENGTH]
+    # journal axis and origin in the bearing frame (a0, d) and their rates
+    dpx = pjx - pbx
+    dpy = pjy - pby
+    dpz = pjz - pbz
+    ax = r00 * dpx + r10 * dpy + r20 * dpz
+    ay = r01 * dpx + r11 * dpy + r21 * dpz
+    az = r02 * dpx + r12 * dpy + r22 * dpz
+    dx = r00 * j02 + r10 * j12 + r20 * j22
+    dy = r01 * j02 + r11 * j12 + r21 * j22
+    dz = r02 * j02 + r12 * j12 + r22 * j22
+    if not dz > _MIN_AXIS_COSINE:
+        return STATUS_AXIS_TILT
+    # d(o_j - o_b)/dt seen from the bearing: dv - w_b x dp
+    qx = vjx - vbx - (wby * dpz - wbz * dpy)
+    qy = vjy - vby - (wbz * dpx - wbx * dpz)
+    qz = vjz - vbz - (wbx * dpy - wby * dpx)
+    adx = r00 * qx + r10 * qy + r20 * qz
+    ady = r01 * qx + r11 * qy + r21 * qz
+    adz = r02 * qx + r12 * qy + r22 * qz
+    # d(u_j)/dt seen from the bearing: (w_j - w_b) x u_j
+    wrx = wjx - wbx
+    wry = wjy - wby
+    wrz = wjz - wbz
+    ux = wry * j22 - wrz * j12
+    uy = wrz * j02 - wrx * j22
+    uz = wrx * j12 - wry * j02
+    ddx = r00 * ux + r10 * uy + r20 * uz
+    ddy = r01 * ux + r11 * uy + r21 * uz
+    ddz = r02 * ux + r12 * uy + r22 * uz
+
+    # ---- radial: slices z = 0, +l, -l; e(z) = m + z t ------------------------------
+    tx = dx / dz
+    ty = dy / dz
+    tdx = (ddx * dz - dx * ddz) / (dz * dz)
+    tdy = (ddy * dz - dy * ddz) / (dz * dz)
+    mx = ax - az * tx
+    my = ay - az * ty
+    mdx = adx - adz * tx - az * tdx
+    mdy = ady - adz * ty - az * tdy
+    # slice penetration |e| + R_j sqrt(1 + x) - R_b1 and its rate (module docstring),
+    # x = ((t.e)^2 + beta^2 |t|^2) / (|e|^2 + beta^2), beta = R_j |t|^2
+    tt = tx * tx + ty * ty
+    tt_dot = 2.0 * (tx * tdx + ty * tdy)
+    beta = r_j * tt
+    bb = beta * beta
+    bbd = beta * r_j * tt_dot  # beta d(beta)/dt
+    bbtt = bb * tt
+    bbtt_dot = 2.0 * bbd * tt + bb * tt_dot
+    t_abs = math.sqrt(tt)
+    mid = _slice_state(0.0, mx, my, mdx, mdy, tx, ty, tdx, tdy, t_abs, bb, bbd, bbtt, bbtt_dot, r_j, r_b1)
+    top = _slice_state(hl, mx, my, mdx, mdy, tx, ty, tdx, tdy, t_abs, bb, bbd, bbtt, bbtt_dot, r_j, r_b1)
+    bot = _slice_state(-hl, mx, my, mdx, mdy, tx, ty, tdx, tdy, t_abs, bb, bbd, bbtt, bbtt_dot, r_j, r_b1)
+
+    # ---- axial: delta(x) = delta_c +- g.x on each end face -------------------------
+    ad = ax * dx + ay * dy + az * dz
+    ad_dot = adx * dx + ady * dy + adz * dz + ax * ddx + ay * ddy + az * ddz
+    g = norm2(dx, dy)
+    base = hl * dz - parameters[_P_HALF_JOURNAL_LENGTH]
+    base_dot = hl * ddz
+    if g > _TIE_TILT:
+        gx = dx / g
+        gy = dy / g
+        g_dot = gx * ddx + gy * ddy
+    else:  # parallel faces: kink of |g|, right derivative |g_dot| (towards where it tilts)
+        g_dot = norm2(ddx, ddy)
+        if g_dot > 0.0:
+            gx = ddx / g_dot
+            gy = ddy / g_dot
+        else:
+            gx = 1.0
+            gy = 0.0
+
+    # axes (world) of both elements
+    b1x, b1y, b1z = r00, r10, r20
+    b2x, b2y, b2z = r01, r11, r21
+    ubx, uby, ubz = r02, r12, r22
+    ujx, ujy, ujz = j02, j12, j22
+    ce = parameters[_P_RESTITUTION]
+
+    # ---- radial candidates 0 (top, z in [0, l]) and 2 (bottom, z in [-l, 0]) ------------
+    k_half = 0.5 * parameters[_P_LINE_STIFFNESS]
+    n_r = parameters[_P_RADIAL_EXPONENT]
+    binomials = (
+        parameters[_P_BINOMIALS],
+        parameters[_P_BINOMIALS + 1],
+        parameters[_P_BINOMIALS + 2],
+        parameters[_P_BINOMIALS + 3],
+        parameters[_P_BINOMIALS + 4],
+        parameters[_P_BINOMIALS + 5],
+    )
+    a, a_dot = mid[0], mid[1]
+    for k in (0, 2):
+        if k == 0:
+            end = top
+            ring = 1.0
+        else:
+            end = bot
+            ring = -1.0
+        b, b_dot = end[0], end[1]
+        deep = b >= a
+        delta_max = b if deep else a
+        out[PENETRATION + k] = delta_max
+        if b - a > _TIE_DEPTH or a - b > _TIE_DEPTH:
+            out[PENETRATION_RATE + k] = b_dot if deep else a_dot
+        else:  # kink of max(a, b): right derivative
+            out[PENETRATION_RATE + k] = b_dot if b_dot > a_dot else a_dot
+        if delta_max > 0.0:
+            m0, u_c, var = _line_moments(a, b, n_r, binomials)
+            f_el = k_half * m0
+            out[KIND + k] = KIND_LINE if (a > 0.0 and b > 0.0) else KIND_POINT
+            z_c = ring * hl * u_c
+            rate_c = a_dot + (b_dot - a_dot) * u_c
+            delta_c = a + (b - a) * u_c
+            spin_radius = hl * math.sqrt(var) if var > 0.0 else 0.0
+            # eccentricity direction of the centroid's slice
+            ex = mx + z_c * tx
+            ey = my + z_c * ty
+            e = norm2(ex, ey)
+            if e > 0.0:
+                hx = ex / e
+                hy = ey / e
+            elif deep:
+                hx, hy = end[2], end[3]
+            else:
+                hx, hy = mid[2], mid[3]
+        else:
+            f_el = rate_c = spin_radius = 0.0
+            out[KIND + k] = KIND_NONE
+            z_c = ring * hl if deep else 0.0
+            delta_c = delta_max
+            if deep:
+                hx, hy = end[2], end[3]
+            else:
+                hx, hy = mid[2], mid[3]
+        # bearing-radial direction, then its part normal to the journal axis
+        rx = hx * b1x + hy * b2x
+        ry = hx * b1y + hy * b2y
+        rz = hx * b1z + hy * b2z
+        ru = rx * ujx + ry * ujy + rz * ujz
+        nx = rx - ru * ujx
+        ny = ry - ru * ujy
+        nz = rz - ru * ujz
+        nn = math.sqrt(nx * nx + ny * ny + nz * nz)
+        nx = nx / nn
+        ny = ny / nn
+        nz = nz / nn
+        ox = pbx + z_c * ubx + r_b1 * rx
+        oy = pby + z_c * uby + r_b1 * ry
+        oz = pbz + z_c * ubz + r_b1 * rz
+        _write3(out, NORMAL + 3 * k, nx, ny, nz)
+        _write3(out, POINT_OUTER + 3 * k, ox, oy, oz)
+        _write3(out, POINT_INNER + 3 * k, ox + delta_c * nx, oy + delta_c * ny, oz + delta_c * nz)
+        out[CENTROID_DEPTH + k] = delta_c
+        out[SPIN_RADIUS + k] = spin_radius
+        # L-N hysteresis on the distributed resultant (unit "penetration", stiffness F_el,
+        # exponent 1): F = F_el [1 + 3(1-ce^2)/4 rate_c / max(onset, floor)], clamped >= 0
+        out[NORMAL_FORCE + k] = lankarani_nikravesh(1.0, rate_c, onset_rates[k], f_el, 1.0, ce) if f_el > 0.0 else 0.0
+
+    # ---- axial candidates 1 (top face) and 3 (bottom face) --------------------------------
+    n_a = parameters[_P_AXIAL_EXPONENT]
+    n_quad = int(parameters[_P_QUAD_POINTS])
+    rule = parameters[_P_QUAD_RULE : _P_QUAD_RULE + 4 * n_quad].reshape((n_quad, 4))
+    plane_density = parameters[_P_PLANE_DENSITY]
+    gr2 = g * r_b2
+    gr1 = g * r_b1
+    for k in (1, 3):
+        if k == 1:
+            ring = 1.0
+            dcen = base - ad
+            dcen_dot = base_dot - ad_dot
+        else:
+            ring = -1.0
+            dcen = base + ad
+            dcen_dot = base_dot + ad_dot
+        # deepest-point direction on the face (bearing frame): +g at the top, -g at the bottom
+        sx = ring * gx
+        sy = ring * gy
+        delta_max = dcen + gr2
+        out[PENETRATION + k] = delta_max
+        out[PENETRATION_RATE + k] = dcen_dot + r_b2 * g_dot
+        if delta_max > 0.0:
+            o0, o1, o2 = _disc_moments(dcen, gr2, r_b2, n_a, rule)
+            i0, i1, i2 = _disc_moments(dcen, gr1, r_b1, n_a, rule)
+            m0 = o0 - i0
+            f_el = plane_density * m0
+            out[KIND + k] = KIND_PLANE if dcen - gr2 > 0.0 else KIND_POINT
+            if m0 > 0.0 and g > _TIE_TILT:
+                xc = (o1 - i1) / m0
+                var = (o2 - i2) / m0 - xc * xc
+            elif m0 > 0.0:  # parallel faces: centroid on the axis
+                xc = 0.0
+                var = (o2 - i2) / m0
+            else:  # vanishing crescent at the rim
+                xc = r_b2
+                var = 0.0
+            delta_c = dcen + g * xc
+            # rate at the centroid: d(delta_c)/dt +- g_dot . x_c (same expression for both faces)
+            rate_c = dcen_dot + xc * (ddx * gx + ddy * gy)
+            spin_radius = math.sqrt(var) if var > 0.0 else 0.0
+        else:
+            f_el = rate_c = spin_radius = 0.0
+            out[KIND + k] = KIND_NONE
+            xc = r_b2
+            delta_c = delta_max
+        cx = xc * sx
+        cy = xc * sy
+        # n = -u_j at the top flange, +u_j at the bottom one
+        nx = -ring * ujx
+        ny = -ring * ujy
+        nz = -ring * ujz
+        ox = pbx + ring * hl * ubx + cx * b1x + cy * b2x
+        oy = pby + ring * hl * uby + cx * b1y + cy * b2y
+        oz = pbz + ring * hl * ubz + cx * b1z + cy * b2z
+        _write3(out, NORMAL + 3 * k, nx, ny, nz)
+        _write3(out, POINT_OUTER + 3 * k, ox, oy, oz)
+        _write3(out, POINT_INNER + 3 * k, ox + delta_c * nx, oy + delta_c * ny, oz + delta_c * nz)
+        out[CENTROID_DEPTH + k] = delta_c
+        out[SPIN_RADIUS + k] = spin_radius
+        out[NORMAL_FORCE + k] = lankarani_nikravesh(1.0, rate_c, onset_rates[k], f_el, 1.0, ce) if f_el > 0.0 else 0.0
+
+    if not math.isfinite(out[PENETRATION] + out[PENETRATION + 1] + out[PENETRATION + 2] + out[PENETRATION + 3]):
+        return STATUS_NONFINITE_PENETRATION
+
+    # eccentricity: ring centres o_b +- l u_b relative to o_j, in the journal frame
+    cx = -(j00 * dpx + j10 * dpy + j20 * dpz)
+    cy = -(j01 * dpx + j11 * dpy + j21 * dpz)
+    cz = -(ujx * dpx + ujy * dpy + ujz * dpz)
+    ux_ = hl * (j00 * ubx + j10 * uby + j20 * ubz)
+    uy_ = hl * (j01 * ubx + j11 * uby + j21 * ubz)
+    uz_ = hl * dz
+    _write3(out, ECCENTRICITY, cx + ux_, cy + uy_, cz + uz_)
+    _write3(out, ECCENTRICITY + 3, cx - ux_, cy - uy_, cz - uz_)
+
+    # ---- friction: slip of the journal's material point at P relative to the bearing's ------
+    code = int(parameters[_P_FRICTION])
+    for k in range(_K):
+        force_n = out[NORMAL_FORCE + k]
+        ftx = fty = ftz = spin = t_spin = 0.0
+        if force_n > 0.0 and code != FRICTION_NONE:
+            nx = out[NORMAL + 3 * k]
+            ny = out[NORMAL + 3 * k + 1]
+            nz = out[NORMAL + 3 * k + 2]
+            half = 0.5 * out[CENTROID_DEPTH + k]
+            rjx = out[POINT_OUTER + 3 * k] + half * nx - pjx  # P - o_j
+            rjy = out[POINT_OUTER + 3 * k + 1] + half * ny - pjy
+            rjz = out[POINT_OUTER + 3 * k + 2] + half * nz - pjz
+            rbx = rjx + dpx  # P - o_b
+            rby = rjy + dpy
+            rbz = rjz + dpz
+            sx_ = vjx + (wjy * rjz - wjz * rjy) - vbx - (wby * rbz - wbz * rby)
+            sy_ = vjy + (wjz * rjx - wjx * rjz) - vby - (wbz * rbx - wbx * rbz)
+            sz_ = vjz + (wjx * rjy - wjy * rjx) - vbz - (wbx * rby - wby * rbx)
+            sn = sx_ * nx + sy_ * ny + sz_ * nz
+            vtx = sx_ - sn * nx
+            vty = sy_ - sn * ny
+            vtz = sz_ - sn * nz
+            spin_radius = out[SPIN_RADIUS + k]
+            spin = (wrx * nx + wry * ny + wrz * nz) * spin_radius
+            if code == FRICTION_EXTERNAL:  # the slip, for Python to apply the law
+                ftx = vtx
+                fty = vty
+                ftz = vtz
+            else:
+                gain = encoded_force_over_speed(
+                    parameters, _P_FRICTION, force_n, math.sqrt(vtx * vtx + vty * vty + vtz * vtz + spin * spin)
+                )
+                ftx = -gain * vtx
+                fty = -gain * vty
+                ftz = -gain * vtz
+                t_spin = -gain * spin * spin_radius
+        _write3(out, FRICTION_FORCE + 3 * k, ftx, fty, ftz)
+        out[SPIN_SPEED + k] = spin
+        out[SPIN_TORQUE + k] = t_spin
+    if code == FRICTION_EXTERNAL:
+        return STATUS_EXTERNAL_FRICTION
+    revolute_wrenches(outer_position, inner_position, out)
+    return STATUS_OK
 
 
 class RevoluteClearanceJoint:
@@ -412,9 +1003,31 @@ class RevoluteClearanceJoint:
         "_half_l_b",
         "_half_l_j",
         "_disc_rule",
+        "_friction_code",
+        "kernel_parameters",
     )
 
     n_candidates: int = 4
+    N_CANDIDATES: int = _K
+    N_ECCENTRICITY: int = 2
+    PENETRATION: int = PENETRATION
+    PENETRATION_RATE: int = PENETRATION_RATE
+    NORMAL_FORCE: int = NORMAL_FORCE
+    NORMAL: int = NORMAL
+    POINT_OUTER: int = POINT_OUTER
+    POINT_INNER: int = POINT_INNER
+    FRICTION_FORCE: int = FRICTION_FORCE
+    ECCENTRICITY: int = ECCENTRICITY
+    WRENCH_OUTER: int = WRENCH_OUTER
+    WRENCH_INNER: int = WRENCH_INNER
+    KIND: int = KIND
+    CENTROID_DEPTH: int = CENTROID_DEPTH
+    SPIN_RADIUS: int = SPIN_RADIUS
+    SPIN_SPEED: int = SPIN_SPEED
+    SPIN_TORQUE: int = SPIN_TORQUE
+    output_size: int = OUTPUT_SIZE
+    kernel = KernelAttribute(revolute_kernel)
+    penetration_kernel = staticmethod(revolute_penetration_kernel)
 
     def __init__(
         self,
@@ -511,6 +1124,25 @@ class RevoluteClearanceJoint:
             c *= (n_r - j + 1) / j
             binomials.append(c)
         self._binomials = tuple(binomials)
+        code, friction_parameters = friction_encoding(friction)
+        self._friction_code = code
+        parameters = np.zeros(_N_PARAMETERS)
+        parameters[_P_JOURNAL_RADIUS] = r_j
+        parameters[_P_BORE_RADIUS] = r_b1
+        parameters[_P_OUTER_RADIUS] = r_b2
+        parameters[_P_HALF_BEARING_LENGTH] = self._half_l_b
+        parameters[_P_HALF_JOURNAL_LENGTH] = self._half_l_j
+        parameters[_P_LINE_STIFFNESS] = k_line
+        parameters[_P_PLANE_DENSITY] = self._plane_density
+        parameters[_P_RADIAL_EXPONENT] = n_r
+        parameters[_P_AXIAL_EXPONENT] = n_a
+        parameters[_P_RESTITUTION] = ce
+        parameters[_P_FRICTION] = code
+        parameters[_P_FRICTION + 1 : _P_BINOMIALS] = friction_parameters
+        parameters[_P_BINOMIALS:_P_QUAD_POINTS] = self._binomials
+        parameters[_P_QUAD_POINTS] = _QUAD_POINTS
+        parameters[_P_QUAD_RULE:] = self._disc_rule.ravel()
+        self.kernel_parameters = parameters
 
     # -- parameters -----------------------------------------------------------------
     @property
@@ -587,6 +1219,11 @@ class RevoluteClearanceJoint:
     def friction(self) -> FrictionLaw:
         return self._friction
 
+    @property
+    def friction_in_kernel(self) -> bool:
+        """True if ``kernel`` applies the friction law (a built-in law); False for a user-defined one."""
+        return self._friction_code != FRICTION_EXTERNAL
+
     def __repr__(self) -> str:
         return (
             f"RevoluteClearanceJoint(journal_radius={self._r_j!r}, bearing_inner_radius={self._r_b1!r}, "
@@ -601,11 +1238,7 @@ class RevoluteClearanceJoint:
     # -- geometry -------------------------------------------------------------------
     def _slice(self, ex: float, ey: float, tx: float, ty: float, beta: float) -> float:
         """Radial penetration of the slice with eccentricity (ex, ey); beta = R_j |t|^2."""
-        ee = ex * ex + ey * ey
-        d = ee + beta * beta
-        s = tx * ex + ty * ey
-        x = (s * s + beta * beta * (tx * tx + ty * ty)) / d if d > 0.0 else 0.0
-        return math.sqrt(ee) + self._r_j * math.sqrt(1.0 + x) - self._r_b1
+        return _slice_penetration(ex, ey, tx, ty, beta, self._r_j, self._r_b1)
 
     def penetration(
         self,
@@ -617,41 +1250,26 @@ class RevoluteClearanceJoint:
         """(4,) deepest penetration (m) of [top_radial, top_axial, bottom_radial, bottom_axial].
 
         Positive = contact.  Cheap (for event functions): no velocities, no forces.
+        Runs :func:`revolute_penetration_kernel`.
         """
-        (r00, r01, r02), (r10, r11, r12), (r20, r21, r22) = _floats(outer_rotation)
-        jr = _floats(inner_rotation)
-        ujx = jr[0][2]
-        ujy = jr[1][2]
-        ujz = jr[2][2]
-        pbx, pby, pbz = _floats(outer_position)
-        pjx, pjy, pjz = _floats(inner_position)
-        dpx = pjx - pbx
-        dpy = pjy - pby
-        dpz = pjz - pbz
-        ax = r00 * dpx + r10 * dpy + r20 * dpz
-        ay = r01 * dpx + r11 * dpy + r21 * dpz
-        az = r02 * dpx + r12 * dpy + r22 * dpz
-        dx = r00 * ujx + r10 * ujy + r20 * ujz
-        dy = r01 * ujx + r11 * ujy + r21 * ujz
-        dz = r02 * ujx + r12 * ujy + r22 * ujz
-        if not dz > _MIN_AXIS_COSINE:
-            self._raise_tilt(dz)
-        tx = dx / dz
-        ty = dy / dz
-        hl = self._half_l_b
-        mx = ax - az * tx
-        my = ay - az * ty
-        beta = self._r_j * (tx * tx + ty * ty)
-        d_mid = self._slice(mx, my, tx, ty, beta)
-        d_top = self._slice(mx + hl * tx, my + hl * ty, tx, ty, beta)
-        d_bot = self._slice(mx - hl * tx, my - hl * ty, tx, ty, beta)
-        ad = ax * dx + ay * dy + az * dz
-        base = hl * dz - self._half_l_j
-        gr2 = math.hypot(dx, dy) * self._r_b2
-        return np.array((max(d_mid, d_top), (base - ad) + gr2, max(d_mid, d_bot), (base + ad) + gr2))
+        outer_rotation = state_array("outer_rotation", outer_rotation, _ROTATION)
+        inner_rotation = state_array("inner_rotation", inner_rotation, _ROTATION)
+        out = np.empty(_K)
+        status = revolute_penetration_kernel(
+            self.kernel_parameters,
+            outer_rotation,
+            state_array("outer_position", outer_position, _VECTOR),
+            inner_rotation,
+            state_array("inner_position", inner_position, _VECTOR),
+            out,
+        )
+        if status != STATUS_OK:
+            self._raise_tilt(outer_rotation, inner_rotation)
+        return out
 
     @staticmethod
-    def _raise_tilt(dz: float) -> None:
+    def _raise_tilt(outer_rotation: np.ndarray, inner_rotation: np.ndarray) -> None:
+        dz = float(outer_rotation[:, 2] @ inner_rotation[:, 2])
         if not math.isfinite(dz):
             raise ContactError(f"non-finite pose (u_b . u_j = {dz!r}): check for NaN or inf in the rotations")
         angle = math.degrees(math.acos(max(-1.0, min(1.0, dz))))
@@ -676,354 +1294,103 @@ class RevoluteClearanceJoint:
         ``outer_*`` is the bearing, ``inner_*`` the journal: rotations (3, 3) frame ->
         world, positions (3,), twists (6,) = [v, w] of the frame origin in world axes;
         ``onset_rates`` (4,) the approach rates recorded at the onset of the current
-        impact of each candidate (floored by the L-N law).
+        impact of each candidate (floored by the L-N law).  Runs :func:`revolute_kernel`;
+        the returned arrays are views of one fresh output array.  Raises ValueError for
+        wrong shapes, :class:`~clearance_contact.errors.ContactError` for NaN / inf
+        input or a journal turned by 90 deg or more.
         """
         try:
-            (r00, r01, r02), (r10, r11, r12), (r20, r21, r22) = _floats(outer_rotation)
-            (j00, j01, j02), (j10, j11, j12), (j20, j21, j22) = _floats(inner_rotation)
-            pbx, pby, pbz = _floats(outer_position)
-            pjx, pjy, pjz = _floats(inner_position)
-            vbx, vby, vbz, wbx, wby, wbz = _floats(outer_twist)
-            vjx, vjy, vjz, wjx, wjy, wjz = _floats(inner_twist)
-            onsets = _floats(onset_rates)
-            if len(onsets) != 4:
-                raise ValueError
-        except (ValueError, TypeError):
+            state = (
+                state_array("outer_rotation", outer_rotation, _ROTATION),
+                state_array("outer_position", outer_position, _VECTOR),
+                state_array("outer_twist", outer_twist, _TWIST),
+                state_array("inner_rotation", inner_rotation, _ROTATION),
+                state_array("inner_position", inner_position, _VECTOR),
+                state_array("inner_twist", inner_twist, _TWIST),
+                state_array("onset_rates", onset_rates, (_K,)),
+            )
+        except (ValueError, TypeError) as exc:
             raise ValueError(
-                "expected rotations (3, 3), positions (3,), twists (6,) and onset_rates (4,)"
+                f"expected rotations (3, 3), positions (3,), twists (6,) and onset_rates (4,): {exc}"
             ) from None
-
-        r_b1 = self._r_b1
-        r_j = self._r_j
-        hl = self._half_l_b
-        # journal axis and origin in the bearing frame (a0, d) and their rates
-        dpx = pjx - pbx
-        dpy = pjy - pby
-        dpz = pjz - pbz
-        ax = r00 * dpx + r10 * dpy + r20 * dpz
-        ay = r01 * dpx + r11 * dpy + r21 * dpz
-        az = r02 * dpx + r12 * dpy + r22 * dpz
-        dx = r00 * j02 + r10 * j12 + r20 * j22
-        dy = r01 * j02 + r11 * j12 + r21 * j22
-        dz = r02 * j02 + r12 * j12 + r22 * j22
-        if not dz > _MIN_AXIS_COSINE:
-            self._raise_tilt(dz)
-        # d(o_j - o_b)/dt seen from the bearing: dv - w_b x dp
-        qx = vjx - vbx - (wby * dpz - wbz * dpy)
-        qy = vjy - vby - (wbz * dpx - wbx * dpz)
-        qz = vjz - vbz - (wbx * dpy - wby * dpx)
-        adx = r00 * qx + r10 * qy + r20 * qz
-        ady = r01 * qx + r11 * qy + r21 * qz
-        adz = r02 * qx + r12 * qy + r22 * qz
-        # d(u_j)/dt seen from the bearing: (w_j - w_b) x u_j
-        wrx = wjx - wbx
-        wry = wjy - wby
-        wrz = wjz - wbz
-        ux = wry * j22 - wrz * j12
-        uy = wrz * j02 - wrx * j22
-        uz = wrx * j12 - wry * j02
-        ddx = r00 * ux + r10 * uy + r20 * uz
-        ddy = r01 * ux + r11 * uy + r21 * uz
-        ddz = r02 * ux + r12 * uy + r22 * uz
-
-        # ---- radial: slices z = 0, +l, -l; e(z) = m + z t ------------------------------
-        tx = dx / dz
-        ty = dy / dz
-        tdx = (ddx * dz - dx * ddz) / (dz * dz)
-        tdy = (ddy * dz - dy * ddz) / (dz * dz)
-        mx = ax - az * tx
-        my = ay - az * ty
-        mdx = adx - adz * tx - az * tdx
-        mdy = ady - adz * ty - az * tdy
-        # slice penetration |e| + R_j sqrt(1 + x) - R_b1 and its rate (module docstring),
-        # x = ((t.e)^2 + beta^2 |t|^2) / (|e|^2 + beta^2), beta = R_j |t|^2
-        tt = tx * tx + ty * ty
-        tt_dot = 2.0 * (tx * tdx + ty * tdy)
-        beta = r_j * tt
-        bb = beta * beta
-        bbd = beta * r_j * tt_dot  # beta d(beta)/dt
-        bbtt = bb * tt
-        bbtt_dot = 2.0 * bbd * tt + bb * tt_dot
-        t_abs = math.sqrt(tt)
-        slices = []
-        for z in (0.0, hl, -hl):
-            ex = mx + z * tx
-            ey = my + z * ty
-            edx = mdx + z * tdx
-            edy = mdy + z * tdy
-            ee = ex * ex + ey * ey
-            e = math.sqrt(ee)
-            if e > 0.0:
-                hx = ex / e
-                hy = ey / e
-                e_dot = hx * edx + hy * edy
-            else:  # on the bearing axis: direction of the tilt, right derivative of |e|
-                hx, hy = (tx / t_abs, ty / t_abs) if t_abs > 0.0 else (1.0, 0.0)
-                e_dot = math.hypot(edx, edy)
-            d = ee + bb
-            if d > 0.0:
-                sp = tx * ex + ty * ey
-                sp_dot = tdx * ex + tdy * ey + tx * edx + ty * edy
-                num = sp * sp + bbtt
-                x = num / d
-                x_dot = ((2.0 * sp * sp_dot + bbtt_dot) * d - 2.0 * num * (ex * edx + ey * edy + bbd)) / (d * d)
-            else:
-                x = x_dot = 0.0
-            root = math.sqrt(1.0 + x)
-            slices.append((e + r_j * root - r_b1, e_dot + 0.5 * r_j * x_dot / root, hx, hy))
-        mid, top, bot = slices
-
-        # ---- axial: delta(x) = delta_c +- g.x on each end face -------------------------
-        ad = ax * dx + ay * dy + az * dz
-        ad_dot = adx * dx + ady * dy + adz * dz + ax * ddx + ay * ddy + az * ddz
-        g = math.hypot(dx, dy)
-        base = hl * dz - self._half_l_j
-        base_dot = hl * ddz
-        if g > _TIE_TILT:
-            gx = dx / g
-            gy = dy / g
-            g_dot = gx * ddx + gy * ddy
-        else:  # parallel faces: kink of |g|, right derivative |g_dot| (towards where it tilts)
-            g_dot = math.hypot(ddx, ddy)
-            if g_dot > 0.0:
-                gx = ddx / g_dot
-                gy = ddy / g_dot
-            else:
-                gx, gy = 1.0, 0.0
-        r_b2 = self._r_b2
-        dc_top = base - ad
-        dc_bot = base + ad
-        dcd_top = base_dot - ad_dot
-        dcd_bot = base_dot + ad_dot
-
-        # axes (world) of both elements
-        b1x, b1y, b1z = r00, r10, r20
-        b2x, b2y, b2z = r01, r11, r21
-        ubx, uby, ubz = r02, r12, r22
-        ujx, ujy, ujz = j02, j12, j22
-
-        pen = [0.0, 0.0, 0.0, 0.0]
-        pen_rate = [0.0, 0.0, 0.0, 0.0]
-        kinds = [KIND_NONE, KIND_NONE, KIND_NONE, KIND_NONE]
-        geo = [None, None, None, None]  # (n, point_outer, delta at P's slice, F_el, rate_c, r_spin)
-
-        # ---- radial candidates 0 (top, z in [0, l]) and 2 (bottom, z in [-l, 0]) ------------
-        k_half = 0.5 * self._k_line
-        for k, end, ring in ((0, top, 1.0), (2, bot, -1.0)):
-            a, a_dot = mid[0], mid[1]
-            b, b_dot = end[0], end[1]
-            deep = b >= a
-            delta_max = b if deep else a
-            pen[k] = delta_max
-            if b - a > _TIE_DEPTH or a - b > _TIE_DEPTH:
-                pen_rate[k] = b_dot if deep else a_dot
-            else:  # kink of max(a, b): right derivative
-                pen_rate[k] = b_dot if b_dot > a_dot else a_dot
-            if delta_max > 0.0:
-                m0, u_c, var = _line_moments(a, b, self._n_r, self._binomials)
-                f_el = k_half * m0
-                kinds[k] = KIND_LINE if (a > 0.0 and b > 0.0) else KIND_POINT
-                z_c = ring * hl * u_c
-                rate_c = a_dot + (b_dot - a_dot) * u_c
-                delta_c = a + (b - a) * u_c
-                spin_radius = hl * math.sqrt(var) if var > 0.0 else 0.0
-                # eccentricity direction of the centroid's slice
-                ex = mx + z_c * tx
-                ey = my + z_c * ty
-                e = math.hypot(ex, ey)
-                if e > 0.0:
-                    hx = ex / e
-                    hy = ey / e
-                else:
-                    hx, hy = (end[2], end[3]) if deep else (mid[2], mid[3])
-            else:
-                f_el = rate_c = spin_radius = 0.0
-                z_c = ring * hl if deep else 0.0
-                delta_c = delta_max
-                hx, hy = (end[2], end[3]) if deep else (mid[2], mid[3])
-            # bearing-radial direction, then its part normal to the journal axis
-            rx = hx * b1x + hy * b2x
-            ry = hx * b1y + hy * b2y
-            rz = hx * b1z + hy * b2z
-            ru = rx * ujx + ry * ujy + rz * ujz
-            nx = rx - ru * ujx
-            ny = ry - ru * ujy
-            nz = rz - ru * ujz
-            nn = math.sqrt(nx * nx + ny * ny + nz * nz)
-            geo[k] = (
-                nx / nn,
-                ny / nn,
-                nz / nn,
-                pbx + z_c * ubx + r_b1 * rx,
-                pby + z_c * uby + r_b1 * ry,
-                pbz + z_c * ubz + r_b1 * rz,
-                delta_c,
-                f_el,
-                rate_c,
-                spin_radius,
+        out = np.empty(OUTPUT_SIZE)
+        status = revolute_kernel(self.kernel_parameters, *state, out)
+        if status == STATUS_EXTERNAL_FRICTION:
+            self._apply_external_friction(state[1], state[4], out)
+        elif status == STATUS_AXIS_TILT:
+            self._raise_tilt(state[0], state[3])
+        elif status == STATUS_NONFINITE_INPUT:
+            raise ContactError(nonfinite_state_message(_STATE_NAMES, state))
+        elif status != STATUS_OK:
+            raise ContactError(
+                f"non-finite penetration {out[PENETRATION:PENETRATION_RATE].tolist()!r}: check the poses "
+                "(NaN or inf input, or overflow)"
             )
+        vectors = out[NORMAL:WRENCH_OUTER].reshape(-1, 3)
+        return JointContact(
+            out[PENETRATION:PENETRATION_RATE],
+            out[PENETRATION_RATE:NORMAL_FORCE],
+            vectors[0:_K],  # normal
+            vectors[_K : 2 * _K],  # point_outer
+            vectors[2 * _K : 3 * _K],  # point_inner
+            out[NORMAL_FORCE:NORMAL],
+            vectors[3 * _K : 4 * _K],  # friction_force
+            out[KIND:CENTROID_DEPTH].astype(np.int64),
+            vectors[4 * _K : 4 * _K + 2],  # eccentricity
+            out[WRENCH_OUTER:WRENCH_INNER],
+            out[WRENCH_INNER:KIND],
+        )
 
-        # ---- axial candidates 1 (top face) and 3 (bottom face) --------------------------------
-        n_a = self._n_a
-        rule = self._disc_rule
-        gr2 = g * r_b2
-        gr1 = g * r_b1
-        for k, dcen, dcen_dot, ring in ((1, dc_top, dcd_top, 1.0), (3, dc_bot, dcd_bot, -1.0)):
-            # deepest-point direction on the face (bearing frame): +g at the top, -g at the bottom
-            sx = ring * gx
-            sy = ring * gy
-            delta_max = dcen + gr2
-            pen[k] = delta_max
-            pen_rate[k] = dcen_dot + r_b2 * g_dot
-            if delta_max > 0.0:
-                o0, o1, o2 = _disc_moments(dcen, gr2, r_b2, n_a, rule)
-                i0, i1, i2 = _disc_moments(dcen, gr1, r_b1, n_a, rule)
-                m0 = o0 - i0
-                f_el = self._plane_density * m0
-                kinds[k] = KIND_PLANE if dcen - gr2 > 0.0 else KIND_POINT
-                if m0 > 0.0 and g > _TIE_TILT:
-                    xc = (o1 - i1) / m0
-                    var = (o2 - i2) / m0 - xc * xc
-                elif m0 > 0.0:  # parallel faces: centroid on the axis
-                    xc = 0.0
-                    var = (o2 - i2) / m0
-                else:  # vanishing crescent at the rim
-                    xc = r_b2
-                    var = 0.0
-                delta_c = dcen + g * xc
-                # rate at the centroid: d(delta_c)/dt +- g_dot . x_c (same expression for both faces)
-                rate_c = dcen_dot + xc * (ddx * gx + ddy * gy)
-                spin_radius = math.sqrt(var) if var > 0.0 else 0.0
-            else:
-                f_el = rate_c = spin_radius = 0.0
-                xc = r_b2
-                delta_c = delta_max
-            cx = xc * sx
-            cy = xc * sy
-            # n = -u_j at the top flange, +u_j at the bottom one
-            geo[k] = (
-                -ring * ujx,
-                -ring * ujy,
-                -ring * ujz,
-                pbx + ring * hl * ubx + cx * b1x + cy * b2x,
-                pby + ring * hl * uby + cx * b1y + cy * b2y,
-                pbz + ring * hl * ubz + cx * b1z + cy * b2z,
-                delta_c,
-                f_el,
-                rate_c,
-                spin_radius,
-            )
+    def _apply_external_friction(self, outer_position: np.ndarray, inner_position: np.ndarray, out: np.ndarray) -> None:
+        """Finish :func:`revolute_kernel`'s ``STATUS_EXTERNAL_FRICTION`` output with the user's friction law.
 
-        # ---- forces (L-N on the distributed resultant), friction, wrenches --------------------
-        normals: list = []  # flat (4 x 3)
-        p_out: list = []
-        p_in: list = []
-        f_normal = [0.0, 0.0, 0.0, 0.0]
-        f_fric = [0.0] * 12
-        fix = fiy = fiz = 0.0  # force on the journal
-        mix = miy = miz = 0.0  # moment on the journal about o_j
-        mox = moy = moz = 0.0  # moment on the bearing about o_b
-        ce = self._restitution
-        frictionless = self._frictionless
+        The kernel left the tangential slip v_t in ``friction_force`` and w_n r_s in
+        ``SPIN_SPEED``; the law sees the combined slip v_t + w_n r_s n (module docstring):
+        its tangential part is F_t, its normal part times r_s the spin torque.  Then the
+        wrenches are assembled by :func:`revolute_wrenches` (the kernel's own code).
+        """
         gos = self._force_over_speed
-        for k in range(4):
-            nx, ny, nz, ox, oy, oz, delta_c, f_el, rate_c, spin_radius = geo[k]
-            normals += (nx, ny, nz)
-            p_out += (ox, oy, oz)
-            p_in += (ox + delta_c * nx, oy + delta_c * ny, oz + delta_c * nz)
-            if f_el <= 0.0:
-                continue
-            # L-N hysteresis on the distributed resultant (unit "penetration", stiffness F_el,
-            # exponent 1): F = F_el [1 + 3(1-ce^2)/4 rate_c / max(onset, floor)], clamped >= 0
-            force_n = lankarani_nikravesh(1.0, rate_c, onsets[k], f_el, 1.0, ce)
+        for k in range(_K):
+            force_n = float(out[NORMAL_FORCE + k])
             if force_n <= 0.0:
                 continue
-            f_normal[k] = force_n
-            half = 0.5 * delta_c
-            rjx = ox + half * nx - pjx  # P - o_j
-            rjy = oy + half * ny - pjy
-            rjz = oz + half * nz - pjz
-            rbx = rjx + dpx  # P - o_b
-            rby = rjy + dpy
-            rbz = rjz + dpz
-            fx = -force_n * nx
-            fy = -force_n * ny
-            fz = -force_n * nz
-            tsx = tsy = tsz = 0.0
-            if not frictionless:
-                # slip of the journal's material point at P relative to the bearing's
-                sx_ = vjx + (wjy * rjz - wjz * rjy) - vbx - (wby * rbz - wbz * rby)
-                sy_ = vjy + (wjz * rjx - wjx * rjz) - vby - (wbz * rbx - wbx * rbz)
-                sz_ = vjz + (wjx * rjy - wjy * rjx) - vbz - (wbx * rby - wby * rbx)
-                sn = sx_ * nx + sy_ * ny + sz_ * nz
-                vtx = sx_ - sn * nx
-                vty = sy_ - sn * ny
-                vtz = sz_ - sn * nz
-                spin = (wrx * nx + wry * ny + wrz * nz) * spin_radius
-                if gos is not None:
-                    gain = gos(force_n, math.sqrt(vtx * vtx + vty * vty + vtz * vtz + spin * spin))
-                    ftx = -gain * vtx
-                    fty = -gain * vty
-                    ftz = -gain * vtz
-                    t_spin = -gain * spin * spin_radius
-                else:  # generic FrictionLaw: slip + spin as one (3,) vector
-                    ff = _floats(
-                        self._friction.force(force_n, np.array((vtx + spin * nx, vty + spin * ny, vtz + spin * nz)))
-                    )
-                    fn_ = ff[0] * nx + ff[1] * ny + ff[2] * nz
-                    ftx = ff[0] - fn_ * nx
-                    fty = ff[1] - fn_ * ny
-                    ftz = ff[2] - fn_ * nz
-                    t_spin = fn_ * spin_radius
-                f_fric[3 * k] = ftx
-                f_fric[3 * k + 1] = fty
-                f_fric[3 * k + 2] = ftz
-                fx += ftx
-                fy += fty
-                fz += ftz
-                tsx = t_spin * nx
-                tsy = t_spin * ny
-                tsz = t_spin * nz
-            fix += fx
-            fiy += fy
-            fiz += fz
-            mix += rjy * fz - rjz * fy + tsx
-            miy += rjz * fx - rjx * fz + tsy
-            miz += rjx * fy - rjy * fx + tsz
-            mox -= rby * fz - rbz * fy + tsx
-            moy -= rbz * fx - rbx * fz + tsy
-            moz -= rbx * fy - rby * fx + tsz
+            i = FRICTION_FORCE + 3 * k
+            vtx, vty, vtz = out[i : i + 3].tolist()
+            nx, ny, nz = out[NORMAL + 3 * k : NORMAL + 3 * k + 3].tolist()
+            spin = float(out[SPIN_SPEED + k])
+            spin_radius = float(out[SPIN_RADIUS + k])
+            if gos is not None:
+                gain = gos(force_n, math.sqrt(vtx * vtx + vty * vty + vtz * vtz + spin * spin))
+                ftx = -gain * vtx
+                fty = -gain * vty
+                ftz = -gain * vtz
+                t_spin = -gain * spin * spin_radius
+            else:  # generic FrictionLaw: slip + spin as one (3,) vector
+                ff = np.asarray(
+                    self._friction.force(force_n, np.array((vtx + spin * nx, vty + spin * ny, vtz + spin * nz))),
+                    dtype=float,
+                ).tolist()
+                fn_ = ff[0] * nx + ff[1] * ny + ff[2] * nz
+                ftx = ff[0] - fn_ * nx
+                fty = ff[1] - fn_ * ny
+                ftz = ff[2] - fn_ * nz
+                t_spin = fn_ * spin_radius
+            out[i] = ftx
+            out[i + 1] = fty
+            out[i + 2] = ftz
+            out[SPIN_TORQUE + k] = t_spin
+        revolute_wrenches(outer_position, inner_position, out)
 
-        if not math.isfinite(pen[0] + pen[1] + pen[2] + pen[3]):
-            raise ContactError(f"non-finite penetration {pen!r}: check the poses (NaN or inf input)")
 
-        # eccentricity: ring centres o_b +- l u_b relative to o_j, in the journal frame
-        cx = -(j00 * dpx + j10 * dpy + j20 * dpz)
-        cy = -(j01 * dpx + j11 * dpy + j21 * dpz)
-        cz = -(ujx * dpx + ujy * dpy + ujz * dpz)
-        ux_ = hl * (j00 * ubx + j10 * uby + j20 * ubz)
-        uy_ = hl * (j01 * ubx + j11 * uby + j21 * ubz)
-        uz_ = hl * dz
-        ecc = [cx + ux_, cy + uy_, cz + uz_, cx - ux_, cy - uy_, cz - uz_]
-
-        # one numpy array, viewed as the fields (the cheap path for small outputs)
-        out = np.fromiter(
-            pen + pen_rate + f_normal + normals + p_out + p_in + f_fric + ecc
-            + [-fix, -fiy, -fiz, mox, moy, moz, fix, fiy, fiz, mix, miy, miz],
-            float,
-            78,
-        )
-        vectors = out[12:66].reshape(18, 3)
-        return JointContact(
-            penetration=out[0:4],
-            penetration_rate=out[4:8],
-            normal=vectors[0:4],
-            point_outer=vectors[4:8],
-            point_inner=vectors[8:12],
-            normal_force=out[8:12],
-            friction_force=vectors[12:16],
-            kind=np.array(kinds),
-            eccentricity=vectors[16:18],
-            wrench_outer=out[66:72],
-            wrench_inner=out[72:78],
-        )
+_ROTATION = (3, 3)
+_VECTOR = (3,)
+_TWIST = (6,)
+_STATE_NAMES = (
+    "outer_rotation",
+    "outer_position",
+    "outer_twist",
+    "inner_rotation",
+    "inner_position",
+    "inner_twist",
+    "onset_rates",
+)

@@ -43,7 +43,31 @@ contact) and the socket's local z axis is reported as ``normal`` (finite output)
 
 Stiffness: Hertz internal sphere contact by default
 (:func:`~clearance_contact.materials.hertz_sphere_stiffness`, exponent 1.5).
+
+Compiled kernel (``docs/contact-api.md``)
+----------------------------------------
+:func:`spherical_kernel` (``SphericalClearanceJoint.kernel``) computes all of the above
+into a flat float64 array ``out`` of ``SphericalClearanceJoint.output_size = 31``
+values; offsets (class attributes, k = 1 candidate, r = 1 eccentricity row)::
+
+    PENETRATION 0 (k)   PENETRATION_RATE 1 (k)   NORMAL_FORCE 2 (k)   NORMAL 3 (3k)
+    POINT_OUTER 6 (3k)  POINT_INNER 9 (3k)       FRICTION_FORCE 12 (3k)
+    ECCENTRICITY 15 (3r)  WRENCH_OUTER 18 (6)  WRENCH_INNER 24 (6)  KIND 30 (k, as float)
+
+``kernel_parameters`` (float64, built once per joint)::
+
+    [R_b, R_s, c, K, n, c_e, friction code, 5 friction parameters]
+
+It returns a status (:mod:`~clearance_contact.compiled`): 0 ok,
+``STATUS_NONFINITE_INPUT``, ``STATUS_NONFINITE_PENETRATION``, or
+``STATUS_EXTERNAL_FRICTION`` for a user-defined friction law (every call): then
+``friction_force`` holds the slip v_t where F_N > 0 (zeros elsewhere), the wrenches are
+not written, and
+:meth:`SphericalClearanceJoint.evaluate` applies the law and calls
+:func:`spherical_wrenches` (the same code the kernel uses).
 """
+
+
 
 from __future__ import annotations
 
@@ -52,24 +76,234 @@ import math
 import numpy as np
 from numpy.typing import ArrayLike
 
-from .errors import ContactParameterError, require_positive
-from .friction import FrictionLaw, NoFriction
+from .compiled import (
+    STATUS_EXTERNAL_FRICTION,
+    STATUS_NONFINITE_INPUT,
+    STATUS_NONFINITE_PENETRATION,
+    STATUS_OK,
+    KernelAttribute,
+    finite_state,
+    norm3,
+    jit,
+)
+from .errors import ContactError, ContactParameterError, nonfinite_state_message, require_positive, state_array
+from .friction import (
+    FRICTION_EXTERNAL,
+    FRICTION_PARAMETERS,
+    FrictionLaw,
+    NoFriction,
+    encoded_force_over_speed,
+    friction_encoding,
+)
 from .materials import Material, hertz_sphere_stiffness
 from .normal_force import lankarani_nikravesh, validate_normal_law
 from .result import KIND_NONE, KIND_POINT, JointContact
 
-__all__ = ["SphericalClearanceJoint"]
+__all__ = ["SphericalClearanceJoint", "spherical_kernel", "spherical_penetration_kernel", "spherical_wrenches"]
 
-_ONE_KIND_NONE = (KIND_NONE,)
-_ONE_KIND_POINT = (KIND_POINT,)
+# -- kernel_parameters layout --------------------------------------------------------
+_P_BALL_RADIUS = 0
+_P_SOCKET_RADIUS = 1
+_P_CLEARANCE = 2
+_P_STIFFNESS = 3
+_P_EXPONENT = 4
+_P_RESTITUTION = 5
+_P_FRICTION = 6  # kind code, then FRICTION_PARAMETERS values
+_N_PARAMETERS = _P_FRICTION + 1 + FRICTION_PARAMETERS
+
+# -- out layout (k = 1 candidate, r = 1 eccentricity row) -----------------------------
+_K = 1
+PENETRATION = 0
+PENETRATION_RATE = PENETRATION + _K
+NORMAL_FORCE = PENETRATION_RATE + _K
+NORMAL = NORMAL_FORCE + _K
+POINT_OUTER = NORMAL + 3 * _K
+POINT_INNER = POINT_OUTER + 3 * _K
+FRICTION_FORCE = POINT_INNER + 3 * _K
+ECCENTRICITY = FRICTION_FORCE + 3 * _K
+WRENCH_OUTER = ECCENTRICITY + 3
+WRENCH_INNER = WRENCH_OUTER + 6
+KIND = WRENCH_INNER + 6
+OUTPUT_SIZE = KIND + _K
 
 
-def _floats(x: ArrayLike) -> list:
-    """Plain Python floats of a numpy array (fast path) or any sequence."""
-    try:
-        return x.tolist()  # type: ignore[union-attr]
-    except AttributeError:
-        return np.asarray(x, dtype=float).tolist()
+@jit
+def spherical_wrenches(parameters, out):
+    """Write ``out[WRENCH_OUTER:WRENCH_INNER + 6]`` from the normal and friction forces in ``out``.
+
+    On the ball ``f_b = -F_N n + F_t``, ``m_b = (R_b - delta/2) n x F_t``; on the socket
+    ``-f_b`` and ``-(R_s + delta/2) n x F_t`` (module docstring); zeros when F_N = 0.
+    """
+    force_n = out[NORMAL_FORCE]
+    if force_n > 0.0:
+        delta = out[PENETRATION]
+        arm_s = parameters[_P_SOCKET_RADIUS] + 0.5 * delta
+        arm_b = parameters[_P_BALL_RADIUS] - 0.5 * delta
+        nx = out[NORMAL]
+        ny = out[NORMAL + 1]
+        nz = out[NORMAL + 2]
+        fx = out[FRICTION_FORCE]
+        fy = out[FRICTION_FORCE + 1]
+        fz = out[FRICTION_FORCE + 2]
+        # n x F_t
+        mx = ny * fz - nz * fy
+        my = nz * fx - nx * fz
+        mz = nx * fy - ny * fx
+        fbx = fx - force_n * nx
+        fby = fy - force_n * ny
+        fbz = fz - force_n * nz
+        out[WRENCH_INNER] = fbx
+        out[WRENCH_INNER + 1] = fby
+        out[WRENCH_INNER + 2] = fbz
+        out[WRENCH_INNER + 3] = arm_b * mx
+        out[WRENCH_INNER + 4] = arm_b * my
+        out[WRENCH_INNER + 5] = arm_b * mz
+        out[WRENCH_OUTER] = -fbx
+        out[WRENCH_OUTER + 1] = -fby
+        out[WRENCH_OUTER + 2] = -fbz
+        out[WRENCH_OUTER + 3] = -arm_s * mx
+        out[WRENCH_OUTER + 4] = -arm_s * my
+        out[WRENCH_OUTER + 5] = -arm_s * mz
+    else:
+        for i in range(12):
+            out[WRENCH_OUTER + i] = 0.0
+
+
+@jit
+def spherical_kernel(
+    parameters, outer_rotation, outer_position, outer_twist, inner_rotation, inner_position, inner_twist, onset_rates, out
+):
+    """Compiled contact law of the spherical joint (module docstring): state in, ``out`` written, status returned.
+
+    ``parameters``: ``SphericalClearanceJoint.kernel_parameters``; rotations (3, 3)
+    (C or Fortran order), positions (3,), twists (6,) = [v, w], ``onset_rates`` (1,),
+    all float64; ``out``: float64 (31,), layout in the module docstring.  Returns
+    ``STATUS_OK`` (0) or a nonzero ``STATUS_*`` code of :mod:`~clearance_contact.compiled`.
+    """
+    if not finite_state(
+        outer_rotation, outer_position, outer_twist, inner_rotation, inner_position, inner_twist, onset_rates
+    ):
+        return STATUS_NONFINITE_INPUT
+    sx = outer_position[0]
+    sy = outer_position[1]
+    sz = outer_position[2]
+    bx = inner_position[0]
+    by = inner_position[1]
+    bz = inner_position[2]
+    vsx = outer_twist[0]
+    vsy = outer_twist[1]
+    vsz = outer_twist[2]
+    wsx = outer_twist[3]
+    wsy = outer_twist[4]
+    wsz = outer_twist[5]
+    vbx = inner_twist[0]
+    vby = inner_twist[1]
+    vbz = inner_twist[2]
+    wbx = inner_twist[3]
+    wby = inner_twist[4]
+    wbz = inner_twist[5]
+
+    ex = bx - sx
+    ey = by - sy
+    ez = bz - sz
+    dist = norm3(ex, ey, ez)
+    delta = dist - parameters[_P_CLEARANCE]
+    if not math.isfinite(delta):
+        return STATUS_NONFINITE_PENETRATION
+    if dist > 0.0:
+        nx = ex / dist
+        ny = ey / dist
+        nz = ez / dist
+    else:  # centred ball: no contact (delta = -c); any unit vector, the socket z axis
+        nx = outer_rotation[0, 2]
+        ny = outer_rotation[1, 2]
+        nz = outer_rotation[2, 2]
+    # eccentricity in the socket frame: R_s^T e
+    for i in range(3):
+        out[ECCENTRICITY + i] = outer_rotation[0, i] * ex + outer_rotation[1, i] * ey + outer_rotation[2, i] * ez
+    # penetration rate d|e|/dt = n . (v_b - v_s)
+    rate = nx * (vbx - vsx) + ny * (vby - vsy) + nz * (vbz - vsz)
+
+    r_s = parameters[_P_SOCKET_RADIUS]
+    r_b = parameters[_P_BALL_RADIUS]
+    out[PENETRATION] = delta
+    out[PENETRATION_RATE] = rate
+    out[NORMAL] = nx
+    out[NORMAL + 1] = ny
+    out[NORMAL + 2] = nz
+    out[POINT_OUTER] = sx + r_s * nx
+    out[POINT_OUTER + 1] = sy + r_s * ny
+    out[POINT_OUTER + 2] = sz + r_s * nz
+    out[POINT_INNER] = bx + r_b * nx
+    out[POINT_INNER + 1] = by + r_b * ny
+    out[POINT_INNER + 2] = bz + r_b * nz
+    out[KIND] = KIND_POINT if delta > 0.0 else KIND_NONE
+
+    force_n = lankarani_nikravesh(
+        delta, rate, onset_rates[0], parameters[_P_STIFFNESS], parameters[_P_EXPONENT], parameters[_P_RESTITUTION]
+    )
+    out[NORMAL_FORCE] = force_n
+    fx = fy = fz = 0.0
+    external = int(parameters[_P_FRICTION]) == FRICTION_EXTERNAL
+    if force_n > 0.0:
+        # lever arms from each centre to the force point P, along n
+        arm_s = r_s + 0.5 * delta
+        arm_b = r_b - 0.5 * delta
+        # slip of the ball's material point at P relative to the socket's:
+        # (v_b + w_b x arm_b n) - (v_s + w_s x arm_s n), tangential part
+        ux = vbx - vsx + arm_b * (wby * nz - wbz * ny) - arm_s * (wsy * nz - wsz * ny)
+        uy = vby - vsy + arm_b * (wbz * nx - wbx * nz) - arm_s * (wsz * nx - wsx * nz)
+        uz = vbz - vsz + arm_b * (wbx * ny - wby * nx) - arm_s * (wsx * ny - wsy * nx)
+        un = ux * nx + uy * ny + uz * nz
+        tx = ux - un * nx
+        ty = uy - un * ny
+        tz = uz - un * nz
+        if external:  # the slip, for Python to apply the law
+            fx = tx
+            fy = ty
+            fz = tz
+        else:
+            gain = encoded_force_over_speed(parameters, _P_FRICTION, force_n, norm3(tx, ty, tz))
+            fx = -gain * tx
+            fy = -gain * ty
+            fz = -gain * tz
+    out[FRICTION_FORCE] = fx
+    out[FRICTION_FORCE + 1] = fy
+    out[FRICTION_FORCE + 2] = fz
+    if external:
+        return STATUS_EXTERNAL_FRICTION
+    spherical_wrenches(parameters, out)
+    return STATUS_OK
+
+
+@jit
+def spherical_penetration_kernel(parameters, outer_rotation, outer_position, inner_rotation, inner_position, out):
+    """``out[0]`` = delta = |b - s| - c (m); returns ``STATUS_OK`` or ``STATUS_NONFINITE_PENETRATION``."""
+    ex = inner_position[0] - outer_position[0]
+    ey = inner_position[1] - outer_position[1]
+    ez = inner_position[2] - outer_position[2]
+    delta = norm3(ex, ey, ez) - parameters[_P_CLEARANCE]
+    out[0] = delta
+    if not math.isfinite(delta):
+        return STATUS_NONFINITE_PENETRATION
+    return STATUS_OK
+
+
+_ROTATION = (3, 3)
+_ROTATION_UNUSED = np.eye(3)  # the spherical penetration does not depend on the rotations
+_VECTOR = (3,)
+_TWIST = (6,)
+
+
+_STATE_NAMES = (
+    "outer_rotation",
+    "outer_position",
+    "outer_twist",
+    "inner_rotation",
+    "inner_position",
+    "inner_twist",
+    "onset_rates",
+)
 
 
 class SphericalClearanceJoint:
@@ -90,6 +324,12 @@ class SphericalClearanceJoint:
     stiffness:
         K in N/m^n, range (0, inf).  ``None``: Hertz internal sphere stiffness from
         the radii and materials, which requires ``exponent == 1.5``.
+
+    Compiled interface (module docstring, ``docs/contact-api.md``): ``kernel``,
+    ``penetration_kernel``, ``kernel_parameters``, ``output_size`` and the offsets
+    ``PENETRATION, PENETRATION_RATE, NORMAL_FORCE, NORMAL, POINT_OUTER, POINT_INNER,
+    FRICTION_FORCE, ECCENTRICITY, WRENCH_OUTER, WRENCH_INNER, KIND`` (and
+    ``N_CANDIDATES = 1``, ``N_ECCENTRICITY = 1``).
     """
 
     __slots__ = (
@@ -103,9 +343,27 @@ class SphericalClearanceJoint:
         "_stiffness",
         "_friction",
         "_force_over_speed",
+        "_friction_code",
+        "kernel_parameters",
     )
 
     n_candidates: int = 1
+    N_CANDIDATES: int = _K
+    N_ECCENTRICITY: int = 1
+    PENETRATION: int = PENETRATION
+    PENETRATION_RATE: int = PENETRATION_RATE
+    NORMAL_FORCE: int = NORMAL_FORCE
+    NORMAL: int = NORMAL
+    POINT_OUTER: int = POINT_OUTER
+    POINT_INNER: int = POINT_INNER
+    FRICTION_FORCE: int = FRICTION_FORCE
+    ECCENTRICITY: int = ECCENTRICITY
+    WRENCH_OUTER: int = WRENCH_OUTER
+    WRENCH_INNER: int = WRENCH_INNER
+    KIND: int = KIND
+    output_size: int = OUTPUT_SIZE
+    kernel = KernelAttribute(spherical_kernel)
+    penetration_kernel = staticmethod(spherical_penetration_kernel)
 
     def __init__(
         self,
@@ -152,6 +410,18 @@ class SphericalClearanceJoint:
         self._stiffness = k
         self._friction = friction
         self._force_over_speed = getattr(friction, "force_over_speed", None)
+        code, friction_parameters = friction_encoding(friction)
+        self._friction_code = code
+        parameters = np.zeros(_N_PARAMETERS)
+        parameters[_P_BALL_RADIUS] = r_b
+        parameters[_P_SOCKET_RADIUS] = r_s
+        parameters[_P_CLEARANCE] = self._clearance
+        parameters[_P_STIFFNESS] = k
+        parameters[_P_EXPONENT] = n
+        parameters[_P_RESTITUTION] = ce
+        parameters[_P_FRICTION] = code
+        parameters[_P_FRICTION + 1 :] = friction_parameters
+        self.kernel_parameters = parameters
 
     # -- parameters -----------------------------------------------------------------
     @property
@@ -192,6 +462,11 @@ class SphericalClearanceJoint:
     def friction(self) -> FrictionLaw:
         return self._friction
 
+    @property
+    def friction_in_kernel(self) -> bool:
+        """True if ``kernel`` applies the friction law (a built-in law); False for a user-defined one."""
+        return self._friction_code != FRICTION_EXTERNAL
+
     def __repr__(self) -> str:
         return (
             f"SphericalClearanceJoint(ball_radius={self._ball_radius!r}, socket_radius={self._socket_radius!r}, "
@@ -209,7 +484,18 @@ class SphericalClearanceJoint:
         inner_position: ArrayLike,
     ) -> np.ndarray:
         """(1,) penetration delta = |b - s| - c (m), > 0 in contact.  Cheap (events)."""
-        return np.array((math.dist(_floats(inner_position), _floats(outer_position)) - self._clearance,))
+        out = np.empty(_K)
+        outer_position = state_array("outer_position", outer_position, _VECTOR)
+        inner_position = state_array("inner_position", inner_position, _VECTOR)
+        status = spherical_penetration_kernel(
+            self.kernel_parameters, _ROTATION_UNUSED, outer_position, _ROTATION_UNUSED, inner_position, out
+        )
+        if status != STATUS_OK:
+            raise ContactError(
+                f"non-finite penetration {out.tolist()!r}: check the poses (NaN or inf input): "
+                f"outer_position={outer_position.tolist()!r}, inner_position={inner_position.tolist()!r}"
+            )
+        return out
 
     def evaluate(
         self,
@@ -226,91 +512,50 @@ class SphericalClearanceJoint:
         ``outer_*`` is the socket, ``inner_*`` the ball; rotations (3, 3) frame ->
         world, positions (3,), twists (6,) = [v, w] of the frame origin in world
         axes; ``onset_rates`` (1,) is the approach rate recorded at the onset of
-        the current impact (floored by the L-N law).
+        the current impact (floored by the L-N law).  Runs :func:`spherical_kernel`;
+        the returned arrays are views of one fresh output array.  Raises
+        :class:`~clearance_contact.errors.ContactError` for NaN / inf input.
         """
-        sx, sy, sz = _floats(outer_position)
-        bx, by, bz = _floats(inner_position)
-        vsx, vsy, vsz, wsx, wsy, wsz = _floats(outer_twist)
-        vbx, vby, vbz, wbx, wby, wbz = _floats(inner_twist)
-        (r0, r1, r2) = _floats(outer_rotation)
-
-        ex = bx - sx
-        ey = by - sy
-        ez = bz - sz
-        dist = math.hypot(ex, ey, ez)
-        delta = dist - self._clearance
-        if dist > 0.0:
-            nx = ex / dist
-            ny = ey / dist
-            nz = ez / dist
-        else:  # centred ball: no contact (delta = -c); any unit vector, the socket z axis
-            nx = r0[2]
-            ny = r1[2]
-            nz = r2[2]
-        # eccentricity in the socket frame: R_s^T e
-        ecc = (
-            r0[0] * ex + r1[0] * ey + r2[0] * ez,
-            r0[1] * ex + r1[1] * ey + r2[1] * ez,
-            r0[2] * ex + r1[2] * ey + r2[2] * ez,
+        state = (
+            state_array("outer_rotation", outer_rotation, _ROTATION),
+            state_array("outer_position", outer_position, _VECTOR),
+            state_array("outer_twist", outer_twist, _TWIST),
+            state_array("inner_rotation", inner_rotation, _ROTATION),
+            state_array("inner_position", inner_position, _VECTOR),
+            state_array("inner_twist", inner_twist, _TWIST),
+            state_array("onset_rates", onset_rates, (_K,)),
         )
-        # penetration rate d|e|/dt = n . (v_b - v_s)
-        rate = nx * (vbx - vsx) + ny * (vby - vsy) + nz * (vbz - vsz)
-
-        r_s = self._socket_radius
-        r_b = self._ball_radius
-        point_outer = (sx + r_s * nx, sy + r_s * ny, sz + r_s * nz)
-        point_inner = (bx + r_b * nx, by + r_b * ny, bz + r_b * nz)
-
-        force_n = lankarani_nikravesh(
-            delta, rate, float(onset_rates[0]), self._stiffness, self._exponent, self._restitution  # type: ignore[index]
-        )
-        if force_n > 0.0:
-            # lever arms from each centre to the force point P, along n
-            arm_s = r_s + 0.5 * delta
-            arm_b = r_b - 0.5 * delta
-            # slip of the ball's material point at P relative to the socket's:
-            # (v_b + w_b x arm_b n) - (v_s + w_s x arm_s n)
-            ux = vbx - vsx + arm_b * (wby * nz - wbz * ny) - arm_s * (wsy * nz - wsz * ny)
-            uy = vby - vsy + arm_b * (wbz * nx - wbx * nz) - arm_s * (wsz * nx - wsx * nz)
-            uz = vbz - vsz + arm_b * (wbx * ny - wby * nx) - arm_s * (wsx * ny - wsy * nx)
-            un = ux * nx + uy * ny + uz * nz
-            tx = ux - un * nx
-            ty = uy - un * ny
-            tz = uz - un * nz
-            g = self._force_over_speed
-            if g is not None:
-                gain = g(force_n, math.hypot(tx, ty, tz))
-                fx = -gain * tx
-                fy = -gain * ty
-                fz = -gain * tz
-            else:  # a FrictionLaw without the scalar fast path
-                fx, fy, fz = _floats(self._friction.force(force_n, np.array((tx, ty, tz))))
-            # n x F_t
-            mx = ny * fz - nz * fy
-            my = nz * fx - nx * fz
-            mz = nx * fy - ny * fx
-            fbx = fx - force_n * nx
-            fby = fy - force_n * ny
-            fbz = fz - force_n * nz
-            wrench_inner = (fbx, fby, fbz, arm_b * mx, arm_b * my, arm_b * mz)
-            wrench_outer = (-fbx, -fby, -fbz, -arm_s * mx, -arm_s * my, -arm_s * mz)
-            friction = (fx, fy, fz)
-            kind = _ONE_KIND_POINT
-        else:
-            wrench_inner = wrench_outer = (0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
-            friction = (0.0, 0.0, 0.0)
-            kind = _ONE_KIND_POINT if delta > 0.0 else _ONE_KIND_NONE
-
+        out = np.empty(OUTPUT_SIZE)
+        parameters = self.kernel_parameters
+        status = spherical_kernel(parameters, *state, out)
+        if status == STATUS_EXTERNAL_FRICTION:  # user-defined friction law, applied here
+            force_n = float(out[NORMAL_FORCE])
+            if force_n > 0.0:  # friction_force holds the slip v_t
+                slip = out[FRICTION_FORCE : FRICTION_FORCE + 3].copy()
+                if self._force_over_speed is not None:
+                    friction = -self._force_over_speed(force_n, math.hypot(*slip.tolist())) * slip
+                else:
+                    friction = np.asarray(self._friction.force(force_n, slip), dtype=float)
+                out[FRICTION_FORCE : FRICTION_FORCE + 3] = friction
+            spherical_wrenches(parameters, out)
+        elif status == STATUS_NONFINITE_INPUT:
+            raise ContactError(nonfinite_state_message(_STATE_NAMES, state))
+        elif status != STATUS_OK:
+            raise ContactError(
+                f"non-finite penetration {out[PENETRATION]!r}: check the poses (NaN or inf input, or overflow): "
+                f"outer_position={state[1].tolist()!r}, inner_position={state[4].tolist()!r}"
+            )
+        vectors = out[NORMAL:WRENCH_OUTER].reshape(5, 3)
         return JointContact(
-            penetration=np.array((delta,)),
-            penetration_rate=np.array((rate,)),
-            normal=np.array(((nx, ny, nz),)),
-            point_outer=np.array((point_outer,)),
-            point_inner=np.array((point_inner,)),
-            normal_force=np.array((force_n,)),
-            friction_force=np.array((friction,)),
-            kind=np.array(kind),
-            eccentricity=np.array((ecc,)),
-            wrench_outer=np.array(wrench_outer),
-            wrench_inner=np.array(wrench_inner),
+            out[PENETRATION:PENETRATION_RATE],
+            out[PENETRATION_RATE:NORMAL_FORCE],
+            vectors[0:1],  # normal
+            vectors[1:2],  # point_outer
+            vectors[2:3],  # point_inner
+            out[NORMAL_FORCE:NORMAL],
+            vectors[3:4],  # friction_force
+            out[KIND:OUTPUT_SIZE].astype(np.int64),
+            vectors[4:5],  # eccentricity
+            out[WRENCH_OUTER:WRENCH_INNER],
+            out[WRENCH_INNER:KIND],
         )

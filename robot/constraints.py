@@ -259,34 +259,14 @@ class ConstraintKernel:
     ) -> np.ndarray:
         """``2 alpha Phid + beta^2 Phi - gamma`` (minus the stabilised right-hand side), ``self.phi_q`` updated.
 
-        The fused form of :meth:`update` for the integrator's right-hand side.
+        The Python right-hand side's form of :meth:`update` (mechanisms with
+        revolute closures; the others use :mod:`robot.rhs_kernels`).
         """
-        if self._others or self._sph_slice is None:
-            phi, gam = self.update(q, drive, drive_acceleration)
-            phi_dot = self.phi_q @ v
-            if self.driven:
-                phi_dot[self.n_closure_rows :] -= drive_rate
-            return two_alpha * phi_dot + beta_squared * phi - gam
-        model, data = self.model, self.data
-        classical = pin.getFrameClassicalAcceleration
-        values = []
-        for fa, fb, ta, tb in self._spherical:
-            xa, ya, za = ta.tolist()
-            xb, yb, zb = tb.tolist()
-            # gamma = a_b - a_a (classical accelerations at zero joint acceleration)
-            gx, gy, gz = (classical(model, data, fb, LWA) - classical(model, data, fa, LWA)).linear.tolist()
-            values += (beta_squared * (xa - xb) - gx, beta_squared * (ya - yb) - gy, beta_squared * (za - zb) - gz)
-        for calc, constraint_data in self._calcs:
-            calc(model, data, constraint_data)
-        phi_q = self.phi_q
-        phi_q[self._sph_slice] = pin.getConstraintsJacobian(model, data, self._models, self._datas)
-        out = phi_q @ v
+        phi, gam = self.update(q, drive, drive_acceleration)
+        phi_dot = self.phi_q @ v
         if self.driven:
-            # driving rows: 2 alpha (v_k - sd) + beta^2 (q_k - s) - sdd, with v_k = (Phi_q v)_k
-            values += (beta_squared * (q[self.actuator_q] - drive) - drive_acceleration - two_alpha * drive_rate).tolist()
-        out *= two_alpha
-        out += values
-        return out
+            phi_dot[self.n_closure_rows :] -= drive_rate
+        return two_alpha * phi_dot + beta_squared * phi - gam
 
     def _assemble(self, spherical_values: list, driving: np.ndarray | None, other) -> np.ndarray:
         out = np.empty(self.n_rows)

@@ -36,9 +36,10 @@ from typing import Callable, Protocol, Sequence
 import numpy as np
 import pinocchio as pin
 
-from clearance_contact import SphericalClearanceJoint
+from clearance_contact import ContactError, SphericalClearanceJoint
 
 from . import constraints as C
+from . import rhs_kernels as K
 from .mechanism import ClearanceSite, Mechanism
 
 LWA = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
@@ -147,6 +148,7 @@ class DynamicsWorkspace:
     sites: tuple = ()  # per contact site: _SiteViews on ``data``
     drive: Callable | None = None  # the drive through its interpolation table (see DriveTable)
     zero_tau: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    compiled: "CompiledTerms | None" = None  # the compiled right-hand side's views, when it applies
 
 
 def make_workspace(dynamics: DynamicsModel) -> DynamicsWorkspace:
@@ -157,15 +159,80 @@ def make_workspace(dynamics: DynamicsModel) -> DynamicsWorkspace:
             simple_q.extend(range(model.idx_qs[j], model.idx_qs[j] + model.nqs[j]))
             simple_v.extend(range(model.idx_vs[j], model.idx_vs[j] + model.nvs[j]))
     data = model.createData()
+    kernel = C.ConstraintKernel(dynamics.constraints, data)
     return DynamicsWorkspace(
         data,
         simple_q=np.array(simple_q, dtype=int),
         simple_v=np.array(simple_v, dtype=int),
-        kernel=C.ConstraintKernel(dynamics.constraints, data),
+        kernel=kernel,
         sites=tuple(_SiteViews(contact, data) for contact in dynamics.contacts),
         drive=drive_table(dynamics.drive),
         zero_tau=np.zeros(model.nv),
+        compiled=CompiledTerms.for_dynamics(dynamics, data, kernel),
     )
+
+
+class CompiledTerms:
+    """Views and index arrays of the compiled right-hand side (:mod:`robot.rhs_kernels`) on one ``pin.Data``.
+
+    Applies when every closure is spherical (rows ``p_a - p_b`` first, then the
+    drivers); otherwise :func:`for_dynamics` returns None and
+    :func:`state_derivative` takes the Python path. A contact law with a
+    compiled ``kernel`` (``clearance_contact``'s laws) is evaluated inside the
+    compiled code; any other law through its ``evaluate``.
+    """
+
+    def __init__(self, dynamics: DynamicsModel, data: pin.Data, kernel: C.ConstraintKernel):
+        model = dynamics.mechanism.model
+        closures = [rows.closure for rows in dynamics.constraints.closures]
+        self.placements = K.placement_buffer(data.oMf)
+        self.jacobian = data.J
+        self.jacobian_rate = data.dJ
+        self.frames_a = np.array([c.frame_a for c in closures], dtype=np.int64)
+        self.frames_b = np.array([c.frame_b for c in closures], dtype=np.int64)
+        self.closure_masks = K.support_mask(model, [f for c in closures for f in (c.frame_a, c.frame_b)])
+        self.phi_q = kernel.phi_q  # driving rows written once by the kernel
+        self.n_closure_rows = kernel.n_closure_rows
+        self.n_candidates = dynamics.n_candidates
+        self.drift = np.zeros(kernel.n_rows)
+        self.tau = np.zeros(model.nv)
+        self.actuator_q = np.asarray(dynamics.mechanism.actuator_q_index, dtype=np.int64)
+        self.actuator_v = np.asarray(dynamics.mechanism.actuator_v_index, dtype=np.int64)
+        if not kernel.driven:
+            self.actuator_q = self.actuator_v = np.zeros(0, dtype=np.int64)
+        # per contact site: (compiled law kernel or None, its parameters, support masks, outer
+        # frame, inner frame, candidate slice, twist buffer, law output buffer, wrench offsets)
+        self.sites = []
+        for contact in dynamics.contacts:
+            law, site = contact.law, contact.site
+            # a law's kernel is None when it cannot do everything compiled (e.g. a user-defined friction law)
+            compiled_law = getattr(law, "kernel", None) is not None and hasattr(law, "kernel_parameters")
+            self.sites.append(
+                (
+                    law.kernel if compiled_law else None,
+                    law.kernel_parameters if compiled_law else None,
+                    K.support_mask(model, [site.outer_frame, site.inner_frame]),
+                    site.outer_frame,
+                    site.inner_frame,
+                    contact.candidates,
+                    np.zeros((2, 6)),
+                    np.zeros(law.output_size) if compiled_law else None,
+                    law.WRENCH_OUTER if compiled_law else 0,  # a Python law's wrenches are stacked [outer, inner]
+                    law.WRENCH_INNER if compiled_law else 6,
+                )
+            )
+        self.laws_compiled = all(site[0] is not None for site in self.sites)
+
+    @classmethod
+    def for_dynamics(cls, dynamics: DynamicsModel, data: pin.Data, kernel: C.ConstraintKernel) -> "CompiledTerms | None":
+        constraints = dynamics.constraints
+        if any(rows.closure.kind != "spherical" or rows.rotation_offset_b is not None for rows in constraints.closures):
+            return None
+        if [rows.row for rows in constraints.closures] != list(range(0, 3 * len(constraints.closures), 3)):
+            return None
+        if constraints.n_closure_rows != 3 * len(constraints.closures):
+            return None  # centring rows
+        return cls(dynamics, data, kernel)
 
 
 class DriveTable:
@@ -226,7 +293,8 @@ class DriveTable:
     def drive(self) -> Drive:
         return self._drive()
 
-    def __call__(self, t: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    def values(self, t: float) -> np.ndarray:
+        """``[s, sd, sdd]`` at t as one new array (3 m values)."""
         if not self._low <= t < self._high:  # not the segment of the previous call
             k = math.floor(t / self.width)
             segment = self.segments.get(k)
@@ -236,8 +304,14 @@ class DriveTable:
             self._low, self._high = k * self.width, (k + 1) * self.width
         middle, coefficients, m = self._last
         if coefficients is None:
-            return self.drive.drive(t)
-        values = ((t - middle) * self._to_unit) ** self.powers @ coefficients
+            return np.concatenate(self.drive.drive(t))
+        out = np.empty(3 * m)
+        K.power_series(coefficients, (t - middle) * self._to_unit, out)
+        return out
+
+    def __call__(self, t: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        values = self.values(t)
+        m = values.shape[0] // 3
         return values[:m], values[m : 2 * m], values[2 * m :]
 
 
@@ -257,12 +331,8 @@ def drive_table(drive: Drive) -> DriveTable:
 
 
 def normalise_quaternions(mechanism: Mechanism, q: np.ndarray) -> np.ndarray:
-    """A copy of q with every free-flyer quaternion of unit norm."""
-    q = np.array(q, dtype=float)
-    for iq, _ in mechanism.free_flyers:
-        quat = q[iq + 3 : iq + 7]
-        q[iq + 3 : iq + 7] = quat / math.sqrt(quat @ quat)
-    return q
+    """A copy of q with every free-flyer quaternion of unit norm (Pinocchio's ``normalize``)."""
+    return pin.normalize(mechanism.model, np.asarray(q, dtype=float))
 
 
 def configuration_rate(dynamics: DynamicsModel, workspace: DynamicsWorkspace, q: np.ndarray, v: np.ndarray) -> np.ndarray:
@@ -346,10 +416,14 @@ def state_derivative(
 
     The same equations as :func:`evaluate` (plus :func:`configuration_rate` and the
     actuator and contact powers), on the hot path: quaternions normalised in a
-    copy of q, the drive through its interpolation table (:class:`DriveTable`),
-    the constraint kernel's prebound views, and a contact law evaluated only
-    when its cheap ``penetration()`` shows contact (out of contact its wrench
-    is zero). Raises ``ContactError`` as :func:`evaluate` does.
+    copy of q, the drive through its interpolation table (:class:`DriveTable`).
+    Mechanisms whose closures are all spherical (every shipped scene) take the
+    compiled path (:class:`CompiledTerms`, :mod:`robot.rhs_kernels`: Pinocchio's
+    CRBA, RNEA, joint Jacobians and their rates in C++, the closure rows, frame
+    twists, compiled contact laws and ``J^T w`` in numba); others the Python
+    path (the constraint kernel's prebound views, a contact law evaluated only
+    when its cheap ``penetration()`` shows contact). Raises ``ContactError`` as
+    :func:`evaluate` does.
     """
     mechanism = dynamics.mechanism
     model, data = mechanism.model, workspace.data
@@ -358,6 +432,9 @@ def state_derivative(
     workspace.rhs_calls += 1
     q = pin.normalize(model, y[:nq])  # a copy with unit quaternions
     v = y[nq : nq + nv]
+    compiled = workspace.compiled
+    if compiled is not None:
+        return _compiled_state_derivative(dynamics, workspace, compiled, t, q, v, onset_rates)
     s, sd, sdd = workspace.drive(t)
     pin.computeAllTerms(model, data, q, v)
     pin.updateFramePlacements(model, data)
@@ -384,6 +461,74 @@ def state_derivative(
     return out
 
 
+def _compiled_state_derivative(
+    dynamics: DynamicsModel,
+    workspace: DynamicsWorkspace,
+    compiled: CompiledTerms,
+    t: float,
+    q: np.ndarray,
+    v: np.ndarray,
+    onset_rates: np.ndarray,
+) -> np.ndarray:
+    """:func:`state_derivative` through :mod:`robot.rhs_kernels` (same equations)."""
+    model, data = dynamics.mechanism.model, workspace.data
+    nq, nv = model.nq, model.nv
+    drive = workspace.drive.values(t)
+    # C++: M (CRBA), h (RNEA at zero acceleration), world joint Jacobians and their rates, frames
+    pin.nonLinearEffects(model, data, q, v)
+    pin.crba(model, data, q)
+    pin.computeJointJacobiansTimeVariation(model, data, q, v)
+    pin.updateFramePlacements(model, data)
+    gains = dynamics.baumgarte
+    placements, jacobian = compiled.placements, compiled.jacobian
+    K.spherical_closure_drift(
+        placements,
+        jacobian,
+        compiled.jacobian_rate,
+        compiled.closure_masks,
+        compiled.frames_a,
+        compiled.frames_b,
+        q,
+        v,
+        drive,
+        compiled.actuator_q,
+        compiled.actuator_v,
+        2.0 * gains.alpha,
+        gains.beta * gains.beta,
+        compiled.phi_q,
+        compiled.drift,
+    )
+    tau = compiled.tau
+    tau[:] = 0.0
+    # the compiled laws are called from here: a numba function given another as an argument
+    # pays ~7 us of dispatch per call, more than the law itself
+    for index, (law_kernel, parameters, masks, outer, inner, candidates, twists, buffer, w_outer, w_inner) in enumerate(compiled.sites):
+        onset = onset_rates[candidates]
+        views = workspace.sites[index]
+        K.site_twists(placements, jacobian, masks, outer, inner, v, twists)
+        if law_kernel is None:  # a law without a compiled kernel: its Python evaluate
+            result = views.law.evaluate(views.outer_rotation, views.outer_position, twists[0], views.inner_rotation, views.inner_position, twists[1], onset)
+            buffer = np.concatenate([result.wrench_outer, result.wrench_inner])
+        else:
+            status = law_kernel(parameters, views.outer_rotation, views.outer_position, twists[0], views.inner_rotation, views.inner_position, twists[1], onset, buffer)
+            if status != 0:
+                _raise_contact_error(dynamics, workspace, index, twists, onset, t, status)
+        K.add_site_wrenches(placements, jacobian, masks, outer, inner, buffer, w_outer, w_inner, tau)
+    out = np.empty(nq + nv + 2)
+    out[nq : nq + nv] = pin.forwardDynamics(model, data, tau, compiled.phi_q, compiled.drift)
+    out[:nq] = pin.tangentMapProduct(model, q, v[:, None])
+    # actuator power: driving force (= Pinocchio's multiplier of the driving row) times the actuator rate
+    K.write_powers(data.lambda_c, compiled.n_closure_rows, v, compiled.actuator_v, tau, out, nq + nv)
+    return out
+
+
+def _raise_contact_error(dynamics: DynamicsModel, workspace: DynamicsWorkspace, index: int, twists, onset, t: float, status: int):
+    """A compiled law returned ``status != 0``: raise its ``evaluate``'s informative ``ContactError``."""
+    views = workspace.sites[index]
+    views.law.evaluate(views.outer_rotation, views.outer_position, twists[0], views.inner_rotation, views.inner_position, twists[1], onset)
+    raise ContactError(f"contact law of {dynamics.contacts[index].site.name!r} failed (status {status}) at t={t!r}")
+
+
 def contact_probe(dynamics: DynamicsModel, workspace: DynamicsWorkspace, t: float, q: np.ndarray, v: np.ndarray, onset_rates: np.ndarray):
     """Penetration and penetration rate of every candidate, and max |Phi|, at (t, q, v).
 
@@ -391,12 +536,29 @@ def contact_probe(dynamics: DynamicsModel, workspace: DynamicsWorkspace, t: floa
     every step (events, failures). ``q`` must have unit quaternions.
     """
     model, data = dynamics.mechanism.model, workspace.data
+    compiled = workspace.compiled
+    if compiled is not None and compiled.laws_compiled:
+        pen = np.empty(compiled.n_candidates)
+        rate = np.empty(compiled.n_candidates)
+        pin.computeJointJacobians(model, data, q)
+        pin.updateFramePlacements(model, data)
+        worst = K.largest_residual(compiled.placements, compiled.frames_a, compiled.frames_b, q, workspace.drive.values(t), compiled.actuator_q)
+        for index, (law_kernel, parameters, masks, outer, inner, candidates, twists, buffer, _, _) in enumerate(compiled.sites):
+            onset = onset_rates[candidates]
+            views = workspace.sites[index]
+            K.site_twists(compiled.placements, compiled.jacobian, masks, outer, inner, v, twists)
+            status = law_kernel(parameters, views.outer_rotation, views.outer_position, twists[0], views.inner_rotation, views.inner_position, twists[1], onset, buffer)
+            if status != 0:
+                _raise_contact_error(dynamics, workspace, index, twists, onset, t, status)
+            k = candidates.stop - candidates.start
+            pen[candidates] = buffer[:k]
+            rate[candidates] = buffer[k : 2 * k]
+        return pen, rate, worst
+    pen = np.empty(dynamics.n_candidates)
+    rate = np.empty(dynamics.n_candidates)
     pin.forwardKinematics(model, data, q, v)
     pin.updateFramePlacements(model, data)
     residual = workspace.kernel.residual(q, workspace.drive(t)[0])
-    n = dynamics.n_candidates
-    pen = np.empty(n)
-    rate = np.empty(n)
     for contact, views in zip(dynamics.contacts, workspace.sites):
         result = contact.law.evaluate(*views.states(model, data), onset_rates[contact.candidates])
         pen[contact.candidates] = result.penetration

@@ -12,11 +12,39 @@ Arrays (n records): ``t``; ``q`` (n x nq), ``v`` (n x nv); ``driving_force``
 ``ee_velocity``, ``ee_acceleration`` (n x 3, world, of the end-effector frame
 origin); ``constraint_residual`` (n, max |Phi|); ``kinetic_energy``,
 ``potential_energy``, ``actuator_power``, ``contact_power``, ``actuator_work``,
-``contact_work`` (n; works integrated with the motion); ``record_kind``
-(0 step, 1 contact onset, 2 penetration maximum, 3 start); per clearance joint
+``contact_work`` (n; works integrated with the motion); ``record_kind`` (n, what
+each record is, below); ``onset_rates`` (n x candidates, the Lankarani-Nikravesh
+approach rate in use at each record); per clearance joint
 J: ``J_eccentricity`` (n x 3 spherical; n x 2 x 3 revolute, top and bottom ring),
 ``J_penetration``, ``J_normal_force``, ``J_friction_force`` (magnitude),
-``J_kind`` (n x candidates).
+``J_kind`` (n x candidates). With contact events also ``event_t``,
+``event_candidate``, ``event_is_onset`` and ``event_value`` (the event log:
+onsets with their approach rate, penetration maxima with their depth).
+
+Record kinds (``record_kind``; constants ``robot.simulation.RECORD_*``; records
+are sorted by time, so kinds 1, 2 and 4 fall between step ends and the spacing
+is not uniform):
+
+* 0 ``RECORD_STEP``: the end of an accepted integration step (spacing at most
+  ``max_step``);
+* 1 ``RECORD_ONSET``: a contact onset located on the step's dense output; the
+  step was cut there and the solver restarted from this state;
+* 2 ``RECORD_PEAK``: a penetration maximum inside a step (penetration rate
+  crossing zero while in contact), so force peaks are not lost to sampling;
+* 3 ``RECORD_START``: the initial state (one record, the first);
+* 4 ``RECORD_OUTPUT``: a point of the regular output grid ``k * output_step``
+  (``SolverOptions.output_step``, set by the studies, never by a scene file),
+  from the dense output of the step containing it; select them with
+  ``result["record_kind"] == 4`` to compare runs at common times.
+
+Status: ``status`` 0 and ``cause`` ``None`` for a run that reached the end;
+``status`` -1 for a run stopped on divergence, with ``message`` (starting with
+the time) and ``cause``, one of ``non-finite state``, ``penetration beyond
+physical bound``, ``constraint drift``, ``step size collapse``, ``event
+chattering``, ``wall time``, ``unphysical pose``, ``Newton divergence``,
+``solver error``, ``interrupted``: what triggers each and what to do is in
+``docs/dynamics.md`` ("Failure causes"). The arrays then hold every record up to
+the stop.
 """
 
 from __future__ import annotations

@@ -41,6 +41,7 @@ import pinocchio as pin
 from scipy.optimize import brentq
 
 from clearance_contact import ONSET_RATE_FLOOR, ContactError
+from clearance_contact.compiled import jit
 
 from . import dynamics as D
 from .integrators import FIXED_STEP_METHODS, STAGES, SecondOrderStructure, make_solver
@@ -48,6 +49,41 @@ from .integrators import FIXED_STEP_METHODS, STAGES, SecondOrderStructure, make_
 SUCCESS, FAILED = 0, -1
 #: restarts at one instant before the run is declared failed (contact events that make no progress)
 MAX_STALLED_RESTARTS = 20
+
+# what an accepted step needs beyond the routine checks (bit flags of _step_flags)
+_ONSET, _HIDDEN, _OVER_BOUND, _PEAK = 1, 2, 4, 8
+_NONE = np.zeros(0, dtype=np.intp)
+
+
+@jit
+def _all_finite(values) -> bool:
+    for x in values:
+        if not math.isfinite(x):
+            return False
+    return True
+
+
+@jit
+def _step_flags(pen_old, rate_old, pen_new, rate_new, bounds) -> int:
+    """Bit flags over the contact candidates, from the step's end points (same tests as the loop's numpy ones).
+
+    ``_ONSET``: penetration crossed zero upward; ``_HIDDEN``: approaching then
+    receding while out of contact at both ends (an impact may hide inside);
+    ``_OVER_BOUND``: penetration beyond its physical bound; ``_PEAK``: penetration
+    maximum passed while in contact. Most steps have none: one compiled call
+    instead of a dozen small numpy operations.
+    """
+    flags = 0
+    for k in range(pen_new.shape[0]):
+        if pen_old[k] <= 0.0 and pen_new[k] > 0.0:
+            flags |= _ONSET
+        if pen_old[k] <= 0.0 and pen_new[k] <= 0.0 and rate_old[k] > 0.0 and rate_new[k] < 0.0:
+            flags |= _HIDDEN
+        if pen_new[k] > bounds[k]:
+            flags |= _OVER_BOUND
+        if pen_new[k] > 0.0 and rate_old[k] > 0.0 and rate_new[k] <= 0.0:
+            flags |= _PEAK
+    return flags
 
 
 @dataclass(frozen=True)
@@ -243,16 +279,17 @@ def integrate(
                 counts["steps"] += 1
                 if options.method not in FIXED_STEP_METHODS and solver.step_size is not None and solver.step_size < limits.min_step and t_new < t_final:
                     raise _Failure("step size collapse", f"t={t_new:.9g} s: step size {solver.step_size:.3e} s below {limits.min_step:.1e} s")
-                if not np.all(np.isfinite(y_new)):
+                if not _all_finite(y_new):
                     raise _Failure("non-finite state", f"t={t_new:.9g} s: the state is not finite")
                 pen_new, rate_new, residual = probe(t_new, y_new)
                 dense = None
+                flags = _step_flags(pen_old, rate_old, pen_new, rate_new, bounds)
                 # --- contact onset (terminal) ---
-                crossing = np.flatnonzero((pen_old <= 0) & (pen_new > 0))
-                if options.hidden_contacts:
+                crossing = np.flatnonzero((pen_old <= 0) & (pen_new > 0)) if flags & _ONSET else _NONE
+                if options.hidden_contacts and flags & _HIDDEN:
                     hidden = np.flatnonzero((pen_old <= 0) & (pen_new <= 0) & (rate_old > 0) & (rate_new < 0))
                 else:
-                    hidden = crossing[:0]
+                    hidden = _NONE
                 candidates_t = []
                 if crossing.size or hidden.size:
                     dense = dense_output(solver)
@@ -292,9 +329,8 @@ def integrate(
                     restarted = True
                     break
                 # --- failure checks ---
-                over = np.flatnonzero(pen_new > bounds)
-                if over.size:
-                    k = over[0]
+                if flags & _OVER_BOUND:
+                    k = np.flatnonzero(pen_new > bounds)[0]
                     raise _Failure(
                         "penetration beyond physical bound",
                         f"t={t_new:.9g} s: penetration {pen_new[k]:.3e} m of contact candidate {k} exceeds "
@@ -308,7 +344,7 @@ def integrate(
                 if time.perf_counter() - started_wall > limits.max_wall_time:
                     raise _Failure("wall time", f"t={t_new:.9g} s: wall time limit {limits.max_wall_time} s reached")
                 # --- penetration maxima (non-terminal) ---
-                if np.any((pen_new > 0) & (rate_old > 0) & (rate_new <= 0)):
+                if flags & _PEAK:
                     dense = dense or dense_output(solver)
                     _record_peaks(dense, probe, pen_old, rate_old, t_old, t_new, record, events, mechanism, nq, rate_new)
                 if output_step is not None and next_output[0] * output_step <= t_new + 1e-12 * output_step:

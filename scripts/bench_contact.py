@@ -1,16 +1,26 @@
-"""Benchmark (not a test): microseconds per ``evaluate()`` call of the clearance joints.
+"""Benchmark (not a test): microseconds per call of the clearance joints' contact laws.
 
 Times the spherical joint (in contact with Brown-McPhee friction, out of contact,
-and its cheap ``penetration()``) and, when importable, the revolute joint (axes
-misaligned with both radial candidates in contact, and centred out of contact).
-timeit, median (and min) over ``--repeats`` >= 7 repeats; writes JSON atomically.
+and its cheap ``penetration()``) and the revolute joint (axes misaligned with all
+four candidates in contact, and centred out of contact), each through
+
+* ``evaluate`` (the Python API: input checks, kernel, ``JointContact`` of views), and
+* the raw compiled ``kernel(parameters, ..., out)`` with a preallocated ``out`` (what a
+  compiled right-hand side calls, minus numba's dispatch from Python, ~0.8 us for its
+  9 array arguments), and ``penetration_kernel``.
+
+``--plain`` also times the same calls as plain Python (``CLEARANCE_CONTACT_JIT=0``, in
+a subprocess; ~100x slower, fewer calls).  timeit, median (and min) over ``--repeats``
+>= 7 repeats; writes JSON atomically.
 """
 
 from __future__ import annotations
 
 import argparse
 import json
+import os
 import platform
+import subprocess
 import statistics
 import sys
 import timeit
@@ -19,6 +29,7 @@ from pathlib import Path
 import numpy as np
 
 from clearance_contact import STEEL, BrownMcPheeFriction, SphericalClearanceJoint
+from clearance_contact.compiled import JIT_ENABLED
 from robot.atomic import atomic_write_text
 
 DEFAULT_OUT = Path(__file__).resolve().parents[1] / "results" / "bench_contact.json"
@@ -36,10 +47,25 @@ def _time(call, repeats: int, number: int) -> dict:
 
 
 def _case(joint, args: tuple, repeats: int, number: int) -> dict:
+    """``evaluate`` and the raw ``kernel`` (preallocated out) on one state."""
     result = joint.evaluate(*args)
+    kernel, parameters = type(joint).kernel, joint.kernel_parameters
+    out = np.empty(joint.output_size)
+    status = kernel(parameters, *args, out)
+    assert status == 0 and np.array_equal(out[joint.WRENCH_INNER : joint.WRENCH_INNER + 6], result.wrench_inner)
     return _time(lambda: joint.evaluate(*args), repeats, number) | {
+        "kernel": _time(lambda: kernel(parameters, *args, out), repeats, number),
         "in_contact": result.in_contact.tolist(),
         "kind": result.kind.tolist(),
+    }
+
+
+def _penetration_case(joint, rotation_outer, position_outer, rotation_inner, position_inner, repeats: int, number: int) -> dict:
+    out = np.empty(joint.n_candidates)
+    kernel, parameters = type(joint).penetration_kernel, joint.kernel_parameters
+    args = (rotation_outer, position_outer, rotation_inner, position_inner)
+    return _time(lambda: joint.penetration(*args), repeats, number) | {
+        "kernel": _time(lambda: kernel(parameters, *args, out), repeats, number)
     }
 
 
@@ -59,7 +85,7 @@ def spherical_cases(repeats: int, number: int) -> dict:
         "spherical_out_of_contact": _case(
             joint, (rot_s, pos_s, twist_s, rot_b, pos_out, twist_b, onset), repeats, number
         ),
-        "spherical_penetration": _time(lambda: joint.penetration(rot_s, pos_s, rot_b, pos_in), repeats, number),
+        "spherical_penetration": _penetration_case(joint, rot_s, pos_s, rot_b, pos_in, repeats, number),
     }
 
 
@@ -92,7 +118,21 @@ def revolute_cases(repeats: int, number: int) -> dict:
     return {
         "revolute_misaligned_in_contact": _case(joint, (_rot_x(tilt), *common), repeats, number),
         "revolute_out_of_contact": _case(joint, (np.eye(3), *common), repeats, number),
+        "revolute_penetration": _penetration_case(joint, _rot_x(tilt), pos, np.eye(3), pos, repeats, number),
     }
+
+
+def plain_python_cases(repeats: int, number: int) -> dict:
+    """The same cases with CLEARANCE_CONTACT_JIT=0 (subprocess): the plain-Python run of the same source."""
+    env = dict(os.environ, CLEARANCE_CONTACT_JIT="0")
+    root = Path(__file__).resolve().parents[1]
+    env["PYTHONPATH"] = str(root) + os.pathsep + env.get("PYTHONPATH", "")
+    code = (
+        "import json, sys; sys.path.insert(0, 'scripts'); import bench_contact as b; "
+        f"print(json.dumps(b.spherical_cases({repeats}, {number}) | b.revolute_cases({repeats}, {number})))"
+    )
+    proc = subprocess.run([sys.executable, "-c", code], cwd=root, env=env, capture_output=True, text=True, check=True)
+    return json.loads(proc.stdout)
 
 
 def main() -> None:
@@ -100,22 +140,43 @@ def main() -> None:
     parser.add_argument("--out", type=Path, default=DEFAULT_OUT, help="JSON file to write (default: %(default)s)")
     parser.add_argument("--repeats", type=int, default=7, help="timeit repeats, >= 7 (default: %(default)s)")
     parser.add_argument("--number", type=int, default=20000, help="calls per repeat (default: %(default)s)")
+    parser.add_argument(
+        "--plain", action="store_true", help="also time plain Python (CLEARANCE_CONTACT_JIT=0), with --number / 50 calls"
+    )
     args = parser.parse_args()
     if args.repeats < 7:
         parser.error("--repeats must be >= 7")
     cases = spherical_cases(args.repeats, args.number) | revolute_cases(args.repeats, args.number)
+    plain = plain_python_cases(args.repeats, max(args.number // 50, 10)) if args.plain else None
+    try:
+        import numba
+
+        numba_version = numba.__version__
+    except ImportError:
+        numba_version = None
     report = {
         "unit": "microseconds per call",
         "statistic": "median over repeats",
+        "jit": JIT_ENABLED,
         "python": sys.version.split()[0],
         "numpy": np.__version__,
+        "numba": numba_version,
         "machine": platform.machine(),
         "processor": platform.processor() or platform.machine(),
         "cases": cases,
     }
+    if plain is not None:
+        report["plain_python_cases"] = plain
     atomic_write_text(args.out, json.dumps(report, indent=2) + "\n")
+    print(f"{'case':34s} {'evaluate':>10s} {'kernel':>10s}" + (f" {'plain eval':>11s} {'plain kern':>11s}" if plain else ""))
     for name, case in cases.items():
-        print(f"{name:34s} {case['median_us']:8.2f} us" if "median_us" in case else f"{name:34s} {case}")
+        if "median_us" not in case:
+            print(f"{name:34s} {case}")
+            continue
+        line = f"{name:34s} {case['median_us']:8.2f}us {case['kernel']['median_us']:8.2f}us"
+        if plain:
+            line += f" {plain[name]['median_us']:9.2f}us {plain[name]['kernel']['median_us']:9.2f}us"
+        print(line)
     print(f"wrote {args.out}")
 
 

@@ -3,8 +3,9 @@
 * ``ConstraintKernel`` (views, one Jacobian call, float 3-vectors) = ``residual``,
   ``jacobian``, ``gamma`` of ``robot.constraints``, for spherical-only, mixed and
   revolute-only constraint sets;
-* ``state_derivative`` (table drive, contact laws skipped out of contact,
-  tangent map) = the reference composition, in and out of contact;
+* ``state_derivative`` (compiled path of ``robot.rhs_kernels``, with compiled
+  or Python contact laws; table drive; tangent map) = the reference
+  composition, in and out of contact;
 * ``evaluate``, ``configuration_rate``, ``contact_probe`` = their reference forms;
 * the drive table = the exact drive, and falls back to it where it cannot fit;
 * generalized-alpha: second order, Newmark conserves the energy of an oscillator,
@@ -114,6 +115,75 @@ def test_state_derivative_equals_reference_in_and_out_of_contact(misaligned):
         touched += bool(expected[-1] != 0.0)
         np.testing.assert_allclose(got, expected, rtol=1e-11, atol=1e-9 * max(1.0, np.max(np.abs(expected))))
     assert touched >= 10  # the sample has states in contact (contact power non-zero)
+
+
+class _PythonLaw:
+    """A contact law seen only through its public Python API (no compiled kernel)."""
+
+    def __init__(self, law):
+        self._law = law
+        self.n_candidates = law.n_candidates
+
+    def evaluate(self, *args):
+        return self._law.evaluate(*args)
+
+    def penetration(self, *args):
+        return self._law.penetration(*args)
+
+
+def test_compiled_right_hand_side_covers_the_shipped_scenes():
+    """Every shipped scene (spherical closures only) runs the compiled path; revolute closures do not."""
+    for name in ("ideal", "spherical", "revolute", "compound", "compound_misaligned"):
+        dynamics = build_run(name).dynamics
+        workspace = D.make_workspace(dynamics)
+        assert workspace.compiled is not None, name
+        assert all(site[0] is not None for site in workspace.compiled.sites), name  # laws compiled too
+    crank = build_mechanism(DATA / "slider_crank.urdf")
+    assert any(rows.closure.kind == "revolute" for rows in C.constraint_set(crank, driven=True).closures)
+
+
+def test_compiled_path_with_a_python_law_equals_reference(misaligned):
+    """A law without a compiled kernel is evaluated through its Python API inside the compiled path."""
+    dynamics = misaligned.dynamics
+    wrapped = D.DynamicsModel(
+        dynamics.mechanism,
+        dynamics.constraints,
+        tuple(D.ContactSite(c.site, _PythonLaw(c.law), c.first_candidate) for c in dynamics.contacts),
+        dynamics.drive,
+        dynamics.baumgarte,
+        dynamics.end_effector_frame,
+    )
+    workspace = D.make_workspace(wrapped)
+    assert workspace.compiled is not None and all(site[0] is None for site in workspace.compiled.sites)
+    compiled_workspace = D.make_workspace(dynamics)
+    data = dynamics.mechanism.model.createData()
+    rng = np.random.default_rng(13)
+    touched = 0
+    for t, y, onset in _random_states(misaligned, rng, 40):
+        try:
+            expected = reference_state_derivative(dynamics, data, t, y, onset)
+        except ContactError:
+            continue
+        touched += bool(expected[-1] != 0.0)
+        scale = 1e-9 * max(1.0, np.max(np.abs(expected)))
+        np.testing.assert_allclose(D.state_derivative(wrapped, workspace, t, y, onset), expected, rtol=1e-11, atol=scale)
+        np.testing.assert_allclose(D.state_derivative(dynamics, compiled_workspace, t, y, onset), expected, rtol=1e-11, atol=scale)
+    assert touched >= 5
+
+
+def test_placement_buffer_follows_pinocchio_data(misaligned):
+    from robot.rhs_kernels import placement_buffer
+
+    model = misaligned.mechanism.model
+    data = model.createData()
+    view = placement_buffer(data.oMf)
+    rng = np.random.default_rng(14)
+    for _ in range(3):
+        q = pin.integrate(model, misaligned.y0[: model.nq], 0.2 * rng.standard_normal(model.nv))
+        pin.framesForwardKinematics(model, data, q)
+        for k in range(model.nframes):
+            np.testing.assert_array_equal(view[k, :9].reshape(3, 3).T, data.oMf[k].rotation)
+            np.testing.assert_array_equal(view[k, 9:], data.oMf[k].translation)
 
 
 def test_state_derivative_contact_hint_does_not_change_the_result(misaligned):

@@ -116,15 +116,21 @@ def test_hidden_contact_guard_finds_an_impact_inside_a_step():
 
 
 def test_hidden_contact_guard_in_a_run(misaligned):
-    """A loose tolerance and a long max_step (RK45, rtol 1e-2, max_step 10 ms) let a step
-    straddle a whole impact in the first 0.1 s of the misaligned scene: the guard finds it;
-    without the guard no onset is counted as hidden."""
-    options = dict(rtol=1e-2, atol=1e-4, max_step=1e-2)
-    guarded = integrate(misaligned.dynamics, misaligned.y0, (0.0, 0.1), SolverOptions("RK45", hidden_contacts=True, **options))
-    unguarded = integrate(misaligned.dynamics, misaligned.y0, (0.0, 0.1), SolverOptions("RK45", hidden_contacts=False, **options))
-    assert guarded.success and unguarded.success
-    assert guarded.n_hidden_contacts >= 1
-    assert unguarded.n_hidden_contacts == 0
+    """Loose tolerances and a long max_step (RK45, rtol 1e-2 to 3e-2, max_step 5-10 ms) let
+    steps straddle whole impacts in the first 0.1 s of the misaligned scene: the guard
+    finds them; without the guard no onset is counted as hidden.
+
+    Which step straddles an impact at such tolerances depends on the last bits of the
+    arithmetic, so the count is summed over three settings (each finds 0-4)."""
+    found = 0
+    for rtol, max_step in ((1e-2, 1e-2), (1e-2, 5e-3), (3e-2, 1e-2)):
+        options = dict(rtol=rtol, atol=rtol / 100, max_step=max_step)
+        guarded = integrate(misaligned.dynamics, misaligned.y0, (0.0, 0.1), SolverOptions("RK45", hidden_contacts=True, **options))
+        unguarded = integrate(misaligned.dynamics, misaligned.y0, (0.0, 0.1), SolverOptions("RK45", hidden_contacts=False, **options))
+        assert guarded.success and unguarded.success
+        assert unguarded.n_hidden_contacts == 0
+        found += guarded.n_hidden_contacts
+    assert found >= 1
 
 
 def test_study_maps_record_causes(misaligned, tmp_path):

@@ -1,4 +1,8 @@
-"""Exudyn (an independent multibody engine) against the Lagrange model: short horizons, asserted tolerances."""
+"""Exudyn (an independent multibody engine) against the Lagrange model: short horizons, asserted tolerances.
+
+The Lagrange reference runs with the validation's pinned solver
+(``robot.validation.settings.VALIDATION_SOLVER``), not with the scene's ``[solver]``.
+"""
 
 from __future__ import annotations
 
@@ -7,15 +11,17 @@ import pytest
 
 pytest.importorskip("exudyn")
 
-from robot.run import build_run, run_scene  # noqa: E402
+from robot.run import run_scene  # noqa: E402
 from robot.validation import exudyn_model as EX  # noqa: E402
 from robot.validation import study  # noqa: E402
+from robot.validation.settings import VALIDATION_SOLVER, validation_run  # noqa: E402
 from scipy.interpolate import CubicSpline  # noqa: E402
 
 
 def _pair(scene: str, duration: float):
-    run = build_run(scene, duration=duration)
+    run = validation_run(scene, duration=duration)
     lagrange = run_scene(run)
+    assert lagrange.metadata["method"] == VALIDATION_SOLVER.method and lagrange.metadata["rtol"] == VALIDATION_SOLVER.rtol
     assert lagrange.success, lagrange.message
     result = EX.simulate(run, study.exudyn_settings_for(run))
     assert result.success, result.message

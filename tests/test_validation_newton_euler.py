@@ -1,15 +1,32 @@
-"""Newton-Euler formulation (robot.validation) against the Lagrange model: short horizons, asserted tolerances."""
+"""Newton-Euler formulation (robot.validation) against the Lagrange model: short horizons, asserted tolerances.
+
+Both engines run with the validation's pinned solver (``robot.validation.settings.VALIDATION_SOLVER``:
+RK45, rtol 1e-7, atol 1e-9, max_step 1e-3 s), never with the scene's ``[solver]``: the thresholds
+below are calibrated to it.
+"""
 
 from __future__ import annotations
+
+import dataclasses
 
 import numpy as np
 import pinocchio as pin
 import pytest
 
 from robot.run import build_run, run_scene
+from robot.scene import load_scene
 from robot.validation import comparison as CMP
 from robot.validation import newton_euler as NE
+from robot.validation import study
 from robot.validation.absolute_constraints import skew
+from robot.validation.event_loop import integrate_with_events
+from robot.validation.settings import VALIDATION_SOLVER, validation_run, validation_solver
+
+#: the comparison thresholds before the first impact (calibrated to VALIDATION_SOLVER)
+ONSET_TOL_S = 1e-8
+FORCE_REL_TOL = 1e-6
+EE_TOL_M = 1e-9
+PEAK_REL_TOL = 0.01
 
 
 def _moved(model: NE.NewtonEulerModel, y: np.ndarray, dr: np.ndarray, dpi: np.ndarray, eps: float) -> np.ndarray:
@@ -110,7 +127,8 @@ def test_range_space_solution_equals_the_augmented_system(compound_model):
 
 
 def _series_pair(scene: str, duration: float):
-    run = build_run(scene, duration=duration)
+    run = validation_run(scene, duration=duration)
+    assert run.scene.solver == VALIDATION_SOLVER
     lagrange = run_scene(run)
     assert lagrange.success, lagrange.message
     result = NE.simulate(run, t_eval=lagrange["t"])
@@ -134,17 +152,78 @@ def test_compound_clearance_agrees_before_and_at_the_first_impact():
     onsets = lagrange["event_t"][lagrange["event_is_onset"]]
     first = onsets.min()
     ne_onsets = np.array([t for t, _, kind in result.run.events if kind == "onset"])
-    assert abs(ne_onsets.min() - first) < 1e-8
+    assert abs(ne_onsets.min() - first) < ONSET_TOL_S
     before = lagrange["t"] < first
     e = result.eval_arrays
     scale = np.max(np.abs(lagrange["driving_force"][before]))
-    assert np.max(np.abs(e["driving_force"][before] - lagrange["driving_force"][before])) <= 1e-6 * scale
-    assert np.max(np.abs(e["ee_position"][before] - lagrange["ee_position"][before])) <= 1e-9
+    assert np.max(np.abs(e["driving_force"][before] - lagrange["driving_force"][before])) <= FORCE_REL_TOL * scale
+    assert np.max(np.abs(e["ee_position"][before] - lagrange["ee_position"][before])) <= EE_TOL_M
     for site in ("S1", "R1"):
         peak_lagrange = np.max(lagrange[f"{site}_normal_force"])
         peak_ne = np.max(result.arrays[f"{site}_normal_force"])
         assert peak_lagrange > 100.0  # an impact happened
-        assert abs(peak_ne - peak_lagrange) <= 0.01 * peak_lagrange
+        assert abs(peak_ne - peak_lagrange) <= PEAK_REL_TOL * peak_lagrange
+
+
+LSODA_SCENE = """
+extends = "compound"
+name = "compound_lsoda"
+[solver]
+method = "LSODA"
+rtol = 1e-6
+atol = 1e-8
+max_step = 5e-3
+"""
+
+
+@pytest.fixture
+def lsoda_scene(tmp_path):
+    """A scene whose [solver] asks for LSODA (a method the Newton-Euler event loop does not offer)."""
+    path = tmp_path / "compound_lsoda.toml"
+    path.write_text(LSODA_SCENE, encoding="utf-8")
+    return path
+
+
+def test_validation_uses_its_pinned_solver_not_the_scenes(lsoda_scene):
+    """The study (scripts/validate.py's path) runs both engines with VALIDATION_SOLVER and meets its thresholds."""
+    assert load_scene(lsoda_scene).solver.method == "LSODA"
+    metrics, series = study.compare_scene(str(lsoda_scene), 0.006, engines=("lagrange", "newton_euler"), progress=lambda _: None)
+    pinned = dataclasses.asdict(VALIDATION_SOLVER)
+    assert metrics["validation_solver"] == pinned
+    assert metrics["scene_solver"]["method"] == "LSODA" and metrics["scene_solver"]["rtol"] == 1e-6
+    for engine in ("lagrange", "newton_euler"):  # what each engine actually ran with
+        entry = metrics["engines"][engine]
+        assert entry["success"], entry["message"]
+        assert {k: entry["solver"][k] for k in ("method", "rtol", "atol", "max_step")} == {k: pinned[k] for k in ("method", "rtol", "atol", "max_step")}
+    # the thresholds of the pinned validation hold
+    ne = metrics["engines"]["newton_euler"]
+    assert metrics["first_impact_s"] is not None
+    assert abs(ne["statistics_relative_to_lagrange"]["first_onset_s"]) < ONSET_TOL_S
+    before = ne["pointwise_before_first_impact"]
+    assert before["n_points"] > 3
+    assert before["driving_force_max_rel"] <= FORCE_REL_TOL
+    assert before["ee_position_max_m"] <= EE_TOL_M
+    for site in ("S1", "R1"):
+        assert metrics["engines"]["lagrange"]["statistics"]["contact"][site]["peak_N"] > 100.0
+        assert abs(ne["statistics_relative_to_lagrange"][site]["peak_N"]) <= PEAK_REL_TOL
+    # the Lagrange records are the pinned run's: spacing bounded by its max_step, not the scene's 5e-3 s
+    assert np.max(np.diff(series["lagrange"].t)) <= VALIDATION_SOLVER.max_step * (1 + 1e-9)
+
+
+def test_unsupported_methods_are_refused_clearly(lsoda_scene):
+    """Unpinned, the LSODA scene cannot run Newton-Euler: the error names the parameter, value and supported set."""
+    unpinned = build_run(lsoda_scene, duration=1e-3)
+    with pytest.raises(ValueError, match=r"method='LSODA' is not supported; supported methods: RK45, RK23, DOP853"):
+        NE.simulate(unpinned)
+    with pytest.raises(ValueError, match=r"rtol=0\.0 must be a positive number"):
+        integrate_with_events(lambda t, y, o: -y, lambda t, y, o: (np.zeros(0), np.zeros(0)), np.ones(1), (0.0, 1.0), 0, rtol=0.0)
+    with pytest.raises(ValueError, match=r"method='BDF' is not supported: .* supports RK45, RK23, DOP853"):
+        validation_solver(method="BDF")
+    assert validation_solver(method="BDF", newton_euler=False).method == "BDF"  # Lagrange against Exudyn only
+    assert validation_solver(rtol=1e-8) == dataclasses.replace(VALIDATION_SOLVER, rtol=1e-8)
+    with pytest.raises(SystemExit, match=r"method='LSODA' is not supported"):
+        study.main(["--method", "LSODA", "--scenes", "compound", "--no-figures", "--out", str(lsoda_scene.parent / "out")])
+    assert not (lsoda_scene.parent / "out").exists()  # refused before anything ran
 
 
 def test_statistics_are_time_weighted():

@@ -49,6 +49,7 @@ class EngineSeries:
     ee_ideal: np.ndarray | None = None  # (n, 3) prescribed platform position at t
     integration_time: float = float("nan")  # wall time of the time integration alone
     penetration: dict = field(default_factory=dict)  # site -> (n,) deepest penetration over the candidates
+    solver: dict = field(default_factory=dict)  # integrator settings the engine actually ran with
 
     @property
     def first_onset(self) -> float:

@@ -4,8 +4,12 @@
 ``DynamicsModel``), so the Newton-Euler formulation has its own loop, doing the
 same thing for any ``rhs(t, y, onset)``:
 
-* a ``scipy.integrate`` explicit Runge-Kutta solver (RK45 by default; the same
-  solver and tolerances as the Lagrange run) is stepped one accepted step at a time;
+* a ``scipy.integrate`` explicit Runge-Kutta solver (:data:`SOLVERS`: RK45, RK23
+  or DOP853; the validation passes its pinned setting,
+  :data:`robot.validation.settings.VALIDATION_SOLVER`, the same as the Lagrange
+  run's) is stepped one accepted step at a time; any other method is refused
+  with a ``ValueError`` naming it and the supported set (the loop needs the
+  explicit solvers' ``step``/``dense_output`` and FSAL restarts);
 * after each step the contact candidates are probed; a penetration crossing
   zero upward (**onset**) is located on the step's dense output with Brent's
   method, the step is cut there, the approach rate at that instant is stored as
@@ -40,6 +44,7 @@ from scipy.optimize import brentq
 from clearance_contact import ONSET_RATE_FLOOR, ContactError
 from robot.simulation import first_contact_time
 
+#: the methods this loop supports (explicit Runge-Kutta with dense output)
 SOLVERS = {"RK45": RK45, "RK23": RK23, "DOP853": DOP853}
 RECORD_STEP, RECORD_ONSET, RECORD_PEAK, RECORD_START = 0, 1, 2, 3
 MAX_STALLED_RESTARTS = 20
@@ -63,6 +68,7 @@ class EventRun:
     n_rhs: int = 0
     n_restarts: int = 0
     wall_time: float = 0.0
+    settings: dict = field(default_factory=dict)  # method, rtol, atol, max_step actually used
 
 
 def integrate_with_events(
@@ -78,12 +84,26 @@ def integrate_with_events(
     atol: float = 1e-9,
     max_step: float = 1e-3,
     t_eval: np.ndarray | None = None,
+    first_step: float | None = None,
 ) -> EventRun:
     """Integrate ``y' = rhs(t, y, onset)`` with contact-onset events.
 
     ``probe(t, y, onset) -> (penetration, penetration_rate)`` per candidate.
     ``normalise`` is applied to every restart state (e.g. unit quaternions).
+    ``first_step``: the first step (``None``: scipy's estimate); later restarts
+    start with the step size reached before the event.
+    ``method`` must be one of :data:`SOLVERS` and the tolerances positive
+    (``ValueError`` otherwise, naming the parameter, its value and what is valid).
     """
+    if method not in SOLVERS:
+        raise ValueError(
+            f"integrate_with_events: method={method!r} is not supported; supported methods: {', '.join(SOLVERS)} "
+            "(explicit Runge-Kutta with dense output)"
+        )
+    for name, value in (("rtol", rtol), ("atol", atol), ("max_step", max_step)) + ((("first_step", first_step),) if first_step is not None else ()):
+        if not (isinstance(value, (int, float)) and not isinstance(value, bool) and value > 0):
+            raise ValueError(f"integrate_with_events: {name}={value!r} must be a positive number")
+    settings = dict(method=method, rtol=float(rtol), atol=float(atol), max_step=float(max_step), first_step=first_step)
     started = time.perf_counter()
     onset = np.full(n_candidates, ONSET_RATE_FLOOR)
     counter = [0]
@@ -148,7 +168,6 @@ def integrate_with_events(
     for k in np.flatnonzero(pen_old > 0):
         onset[k] = max(rate_old[k], ONSET_RATE_FLOOR)
     solver_class = SOLVERS[method]
-    first_step = None
     n_steps = n_restarts = stalled = 0
     success, message = True, "the integration reached the end of the time span"
     try:
@@ -231,4 +250,5 @@ def integrate_with_events(
         counter[0],
         n_restarts,
         time.perf_counter() - started,
+        settings,
     )

@@ -54,6 +54,7 @@ import pinocchio as pin
 
 from ..mechanism import rotation_z_to
 from ..run import Run
+from ..simulation import SolverOptions
 from .absolute_constraints import BodyStates, ConstraintSet, cross
 from .bodies import MechanismGeometry, read_geometry, rpy_matrix
 from .event_loop import EventRun, integrate_with_events
@@ -418,11 +419,22 @@ def simulate(
     atol: float | None = None,
     max_step: float | None = None,
     t_eval: np.ndarray | None = None,
+    solver: SolverOptions | None = None,
 ) -> NEResult:
-    """Integrate the Newton-Euler model of ``run`` (solver settings default to the scene's)."""
+    """Integrate the Newton-Euler model of ``run``.
+
+    Solver settings: ``solver`` if given, else ``run.scene.solver``, i.e. the
+    same as :func:`robot.run.run_scene` uses for the Lagrange model of this
+    ``run``; ``method``, ``rtol``, ``atol``, ``max_step`` override single fields.
+    The validation builds its runs with
+    :func:`robot.validation.settings.validation_run`, whose ``scene.solver`` is the
+    pinned :data:`~robot.validation.settings.VALIDATION_SOLVER`, not the scene
+    file's ``[solver]``. A method outside :data:`.event_loop.SOLVERS` raises
+    ``ValueError``.
+    """
     started = time.perf_counter()
+    solver = run.scene.solver if solver is None else solver
     model = build_model(run)
-    solver = run.scene.solver
     y0 = initial_state(model, run)
 
     def rhs(t, y, onset):
@@ -438,11 +450,12 @@ def simulate(
         (0.0, run.scene.duration if t_end is None else t_end),
         model.n_candidates,
         normalise=model.normalise,
-        method=method or solver.method,
-        rtol=rtol or solver.rtol,
-        atol=atol or solver.atol,
-        max_step=max_step or solver.max_step,
+        method=solver.method if method is None else method,
+        rtol=solver.rtol if rtol is None else rtol,
+        atol=solver.atol if atol is None else atol,
+        max_step=solver.max_step if max_step is None else max_step,
         t_eval=t_eval,
+        first_step=solver.first_step,
     )
     arrays = outputs(model, events.t, events.y, events.onset_rates)
     arrays["record_kind"] = events.kind

@@ -1,14 +1,19 @@
 """The validation study: each scene with the Lagrange model, Newton-Euler and Exudyn; JSON and figures.
 
-``python scripts/validate.py [--out DIR] [--scenes ...] [--duration SCENE=T ...]``
-calls :func:`main`. Defaults (:data:`DEFAULT_DURATIONS`): the ideal mechanism over
+``python scripts/validate.py [--out DIR] [--scenes ...] [--duration SCENE=T ...]
+[--method M] [--rtol R] [--atol A] [--max-step H]`` calls :func:`main`. Defaults (:data:`DEFAULT_DURATIONS`): the ideal mechanism over
 one period of the reference motion (1 s), the clearance scenes over 0.5 s (the
 first impacts, the transient of the misaligned bearing and a few tens of
 impacts), which keeps the whole study to a few minutes on two cores.
 
-Settings: the Lagrange model and Newton-Euler use the scene's integrator
-(RK45 and its tolerances, the same for both); Exudyn uses generalized-alpha with
-fixed steps (:data:`EXUDYN_SETTINGS`: 1e-4 s for the ideal mechanism, 1e-5 s with
+Settings: the Lagrange model and Newton-Euler both use the validation's pinned
+integrator :data:`robot.validation.settings.VALIDATION_SOLVER` (RK45, rtol 1e-7,
+atol 1e-9, max_step 1e-3 s), **not** the scene's ``[solver]`` table, so the
+study and its thresholds do not change when a scene's production solver does
+(``--method``, ``--rtol``, ``--atol``, ``--max-step``, ``--first-step`` override
+it for both engines; ``validation.json`` records the setting used and the
+scene's own). Exudyn uses generalized-alpha with fixed steps
+(:data:`EXUDYN_SETTINGS`: 1e-4 s for the ideal mechanism, 1e-5 s with
 clearance, where one impact lasts 0.1-0.3 ms).
 """
 
@@ -23,11 +28,14 @@ from pathlib import Path
 
 import numpy as np
 
+from ..integrators import METHODS
 from ..platform_kinematics import platform_state
 from ..run import build_run, run_scene
+from ..simulation import SolverOptions
 from . import comparison as CMP
 from . import exudyn_model as EX
 from . import newton_euler as NE
+from .settings import VALIDATION_SOLVER, check_solver, validation_solver, with_solver
 
 DEFAULT_SCENES = ("ideal", "spherical", "compound", "compound_misaligned")
 DEFAULT_DURATIONS = {"ideal": 1.0, "spherical": 0.5, "compound": 0.5, "compound_misaligned": 0.5}
@@ -65,6 +73,7 @@ def lagrange_series(run) -> CMP.EngineSeries:
     return CMP.EngineSeries(
         "lagrange", result["t"], result["driving_force"], result["ee_position"], contact, np.unique(onsets), wall, result.success, result.message,
         integration_time=float(result.counts["wall_time"]), penetration=penetration,
+        solver={key: result.metadata[key] for key in ("method", "rtol", "atol", "max_step")},
     )
 
 
@@ -80,7 +89,7 @@ def newton_euler_series(run, t_eval: np.ndarray) -> tuple[CMP.EngineSeries, CMP.
         penetration = {site: np.max(arrays[f"{site}_penetration"], axis=1) for site in sites}
         return CMP.EngineSeries(
             "newton_euler", arrays["t"], arrays["driving_force"], arrays["ee_position"], contact, onsets, result.wall_time, result.success, result.run.message,
-            integration_time=result.run.wall_time, penetration=penetration,
+            integration_time=result.run.wall_time, penetration=penetration, solver=dict(result.run.settings),
         )
 
     return series(a), series(e)
@@ -98,16 +107,31 @@ def exudyn_series(run, settings: EX.ExudynSettings) -> CMP.EngineSeries:
     return CMP.EngineSeries(
         "exudyn", result.t, result.driving_force, result.ee_position, contact, np.unique(onsets), result.wall_time, result.success, result.message,
         integration_time=result.solve_time, penetration=penetration,
+        solver={"method": "GeneralizedAlpha (Exudyn)", **settings.__dict__},
     )
 
 
-def compare_scene(scene: str, duration: float, engines=ENGINES, progress=print) -> tuple[dict, dict]:
-    """Run one scene with the engines; returns (metrics for the JSON, series for the figures)."""
-    run = build_run(scene, duration=duration)
-    progress(f"[{scene}] Lagrange ({duration} s)")
+def compare_scene(scene: str, duration: float, engines=ENGINES, progress=print, solver: SolverOptions = VALIDATION_SOLVER) -> tuple[dict, dict]:
+    """Run one scene with the engines; returns (metrics for the JSON, series for the figures).
+
+    ``scene``: a shipped scene name or a scene file. The Lagrange and Newton-Euler runs
+    both use ``solver`` (default :data:`VALIDATION_SOLVER`), whatever the scene's
+    ``[solver]`` says; ``metrics["validation_solver"]`` and ``metrics["scene_solver"]``
+    record both.
+    """
+    check_solver(solver, newton_euler="newton_euler" in engines)
+    built = build_run(scene, duration=duration)
+    run = with_solver(built, solver)
+    progress(f"[{scene}] Lagrange ({duration} s, {solver.method} rtol {solver.rtol:g} atol {solver.atol:g} max_step {solver.max_step:g} s)")
     lagrange = lagrange_series(run)
     series = {"lagrange": lagrange}
-    metrics: dict = {"duration_s": duration, "sites": _sites(run), "engines": {}}
+    metrics: dict = {
+        "duration_s": duration,
+        "sites": _sites(run),
+        "validation_solver": dataclasses.asdict(solver),
+        "scene_solver": dataclasses.asdict(built.scene.solver),
+        "engines": {},
+    }
     if "newton_euler" in engines:
         progress(f"[{scene}] Newton-Euler")
         ne_records, ne_at_lagrange = newton_euler_series(run, lagrange.t)
@@ -129,6 +153,7 @@ def compare_scene(scene: str, duration: float, engines=ENGINES, progress=print) 
         entry = {
             "success": s.success,
             "message": s.message,
+            "solver": s.solver,
             "wall_time_s": s.wall_time,
             "integration_wall_time_s": s.integration_time,
             "n_records": int(len(s.t)),
@@ -153,7 +178,9 @@ def summary_table(results: dict) -> str:
     """A plain-text table of the main numbers."""
     lines = []
     for scene, m in results["scenes"].items():
-        lines.append(f"{scene} ({m['duration_s']} s, first impact {m['first_impact_s']})")
+        vs = m.get("validation_solver", {})
+        solver = f", {vs['method']} rtol {vs['rtol']:g} atol {vs['atol']:g} max_step {vs['max_step']:g} s" if vs else ""
+        lines.append(f"{scene} ({m['duration_s']} s, first impact {m['first_impact_s']}{solver})")
         for name, e in m["engines"].items():
             pw = e.get("pointwise_before_first_impact", {})
             st = e["statistics"]
@@ -177,6 +204,17 @@ def parse_args(argv=None) -> argparse.Namespace:
     parser.add_argument("--duration", nargs="*", default=[], metavar="SCENE=T", help="override a scene's duration (s)")
     parser.add_argument("--engines", nargs="+", default=list(ENGINES[1:]), choices=ENGINES[1:], help="engines besides the Lagrange model")
     parser.add_argument("--exudyn-step", type=float, default=None, help="Exudyn step size with clearance joints (default 1e-5 s)")
+    v = VALIDATION_SOLVER
+    group = parser.add_argument_group(
+        "validation solver",
+        "integrator of the Lagrange and the Newton-Euler runs, the same for both; the scenes' [solver] tables are not used "
+        f"(default: robot.validation.settings.VALIDATION_SOLVER = {v.method}, rtol {v.rtol:g}, atol {v.atol:g}, max_step {v.max_step:g} s)",
+    )
+    group.add_argument("--method", choices=list(METHODS), default=None, help=f"integrator (default {v.method}; with newton_euler: RK45, RK23 or DOP853)")
+    group.add_argument("--rtol", type=float, default=None, help=f"relative tolerance (default {v.rtol:g})")
+    group.add_argument("--atol", type=float, default=None, help=f"absolute tolerance (default {v.atol:g})")
+    group.add_argument("--max-step", type=float, default=None, help=f"largest step, s (default {v.max_step:g}; also the largest spacing of the compared records)")
+    group.add_argument("--first-step", type=float, default=None, help="first step, s (the step size of fixed-step methods)")
     parser.add_argument("--no-figures", action="store_true", help="write validation.json only")
     return parser.parse_args(argv)
 
@@ -192,16 +230,21 @@ def main(argv=None) -> int:
             raise SystemExit(f"--duration {item!r}: expected SCENE=SECONDS") from None
     if args.exudyn_step is not None:
         EXUDYN_SETTINGS["clearance"] = dataclasses.replace(EXUDYN_SETTINGS["clearance"], step_size=args.exudyn_step)
+    try:
+        solver = validation_solver(args.method, args.rtol, args.atol, args.max_step, args.first_step, newton_euler="newton_euler" in args.engines)
+    except ValueError as exc:
+        raise SystemExit(f"scripts/validate.py: {exc}") from None
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     results = {
         "description": "Lagrange model (robot.dynamics) against Newton-Euler (robot.validation.newton_euler) and Exudyn (robot.validation.exudyn_model); see docs/validation.md",
+        "validation_solver": dataclasses.asdict(solver),
         "scenes": {},
     }
     started = time.perf_counter()
     for scene in args.scenes:
         duration = durations.get(scene, 0.5)
-        metrics, series = compare_scene(scene, duration, ("lagrange", *args.engines))
+        metrics, series = compare_scene(scene, duration, ("lagrange", *args.engines), solver=solver)
         results["scenes"][scene] = metrics
         if not args.no_figures:
             from .figures import scene_figures
