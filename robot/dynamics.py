@@ -31,7 +31,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 import weakref
-from typing import Callable, Protocol, Sequence
+from typing import Callable, NamedTuple, Protocol, Sequence
 
 import numpy as np
 import pinocchio as pin
@@ -529,17 +529,26 @@ def _raise_contact_error(dynamics: DynamicsModel, workspace: DynamicsWorkspace, 
     raise ContactError(f"contact law of {dynamics.contacts[index].site.name!r} failed (status {status}) at t={t!r}")
 
 
-def contact_probe(dynamics: DynamicsModel, workspace: DynamicsWorkspace, t: float, q: np.ndarray, v: np.ndarray, onset_rates: np.ndarray):
-    """Penetration and penetration rate of every candidate, and max |Phi|, at (t, q, v).
+class Probe(NamedTuple):
+    """What :func:`contact_probe` measures at one state (per contact candidate, and the constraints)."""
 
-    Kinematics only (``forwardKinematics(q, v)``): what the simulation checks after
-    every step (events, failures). ``q`` must have unit quaternions.
+    penetration: np.ndarray
+    penetration_rate: np.ndarray
+    residual: float  # max |Phi|
+    normal_force: np.ndarray
+
+
+def contact_probe(dynamics: DynamicsModel, workspace: DynamicsWorkspace, t: float, q: np.ndarray, v: np.ndarray, onset_rates: np.ndarray) -> Probe:
+    """Penetration, penetration rate and normal force of every candidate, and max |Phi|, at (t, q, v).
+
+    Kinematics only (no dynamics): what the simulation checks after every step
+    (events, failures, force maxima). ``q`` must have unit quaternions.
     """
     model, data = dynamics.mechanism.model, workspace.data
     compiled = workspace.compiled
+    n = dynamics.n_candidates if compiled is None else compiled.n_candidates
+    pen, rate, force = np.empty(n), np.empty(n), np.empty(n)
     if compiled is not None and compiled.laws_compiled:
-        pen = np.empty(compiled.n_candidates)
-        rate = np.empty(compiled.n_candidates)
         pin.computeJointJacobians(model, data, q)
         pin.updateFramePlacements(model, data)
         worst = K.largest_residual(compiled.placements, compiled.frames_a, compiled.frames_b, q, workspace.drive.values(t), compiled.actuator_q)
@@ -551,11 +560,11 @@ def contact_probe(dynamics: DynamicsModel, workspace: DynamicsWorkspace, t: floa
             if status != 0:
                 _raise_contact_error(dynamics, workspace, index, twists, onset, t, status)
             k = candidates.stop - candidates.start
-            pen[candidates] = buffer[:k]
-            rate[candidates] = buffer[k : 2 * k]
-        return pen, rate, worst
-    pen = np.empty(dynamics.n_candidates)
-    rate = np.empty(dynamics.n_candidates)
+            law = views.law
+            pen[candidates] = buffer[law.PENETRATION : law.PENETRATION + k]
+            rate[candidates] = buffer[law.PENETRATION_RATE : law.PENETRATION_RATE + k]
+            force[candidates] = buffer[law.NORMAL_FORCE : law.NORMAL_FORCE + k]
+        return Probe(pen, rate, worst, force)
     pin.forwardKinematics(model, data, q, v)
     pin.updateFramePlacements(model, data)
     residual = workspace.kernel.residual(q, workspace.drive(t)[0])
@@ -563,7 +572,8 @@ def contact_probe(dynamics: DynamicsModel, workspace: DynamicsWorkspace, t: floa
         result = contact.law.evaluate(*views.states(model, data), onset_rates[contact.candidates])
         pen[contact.candidates] = result.penetration
         rate[contact.candidates] = result.penetration_rate
-    return pen, rate, (float(np.max(np.abs(residual))) if residual.size else 0.0)
+        force[contact.candidates] = result.normal_force
+    return Probe(pen, rate, (float(np.max(np.abs(residual))) if residual.size else 0.0), force)
 
 
 class _SiteViews:

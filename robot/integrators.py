@@ -17,7 +17,7 @@ scanned for events). Fixed-step schemes take ``first_step`` as their step size.
 * ``Newmark``: the same with ``rho_inf = 1`` (trapezoidal rule / average
   acceleration: no numerical damping);
 * ``CVODE_BDF``, ``CVODE_Adams``: SUNDIALS CVODE (variable order, variable step)
-  through the ``scikit-sundae`` binding, when it is installed.
+  through the ``scikit-sundae`` binding (a dependency of the package).
 
 ``rejected_steps(solver, accepted)`` recovers the number of rejected steps where
 the method allows it: an explicit Runge-Kutta attempt costs ``n_stages``
@@ -309,7 +309,7 @@ class Newmark(GeneralizedAlpha):
         super().__init__(*args, **kwargs)
 
 
-try:  # SUNDIALS CVODE through scikit-sundae (optional)
+try:  # SUNDIALS CVODE through scikit-sundae (a dependency; guarded so the rest works without it)
     from sksundae.cvode import CVODE as _CVODE
 except ImportError:  # pragma: no cover - depends on the environment
     _CVODE = None
@@ -348,10 +348,12 @@ class _CVODEBase(OdeSolver):
         if _CVODE is None:
             raise ValueError("CVODE needs the scikit-sundae package (pip install scikit-sundae)")
         super().__init__(fun, t0, y0, t_bound, vectorized)
-        fun_counted = self.fun
 
         def rhsfn(t, y, yp):
-            yp[:] = fun_counted(t, np.array(y))
+            # the user function directly (scipy's wrapper would copy y and convert the result
+            # again): it reads y during the call only, and CVODE owns both buffers
+            self.nfev += 1
+            yp[:] = fun(t, y)
 
         options = dict(
             method=self.cvode_method,

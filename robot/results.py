@@ -18,11 +18,13 @@ approach rate in use at each record); per clearance joint
 J: ``J_eccentricity`` (n x 3 spherical; n x 2 x 3 revolute, top and bottom ring),
 ``J_penetration``, ``J_normal_force``, ``J_friction_force`` (magnitude),
 ``J_kind`` (n x candidates). With contact events also ``event_t``,
-``event_candidate``, ``event_is_onset`` and ``event_value`` (the event log:
-onsets with their approach rate, penetration maxima with their depth).
+``event_candidate``, ``event_is_onset``, ``event_kind`` (the record kind each
+event wrote: 1 onset, 2 penetration maximum, 5 force maximum) and ``event_value``
+(the event log: onsets with their approach rate, penetration maxima with their
+depth, force maxima with the force in N).
 
 Record kinds (``record_kind``; constants ``robot.simulation.RECORD_*``; records
-are sorted by time, so kinds 1, 2 and 4 fall between step ends and the spacing
+are sorted by time, so kinds 1, 2, 4 and 5 fall between step ends and the spacing
 is not uniform):
 
 * 0 ``RECORD_STEP``: the end of an accepted integration step (spacing at most
@@ -30,12 +32,17 @@ is not uniform):
 * 1 ``RECORD_ONSET``: a contact onset located on the step's dense output; the
   step was cut there and the solver restarted from this state;
 * 2 ``RECORD_PEAK``: a penetration maximum inside a step (penetration rate
-  crossing zero while in contact), so force peaks are not lost to sampling;
+  crossing zero while in contact);
 * 3 ``RECORD_START``: the initial state (one record, the first);
 * 4 ``RECORD_OUTPUT``: a point of the regular output grid ``k * output_step``
   (``SolverOptions.output_step``, set by the studies, never by a scene file),
   from the dense output of the step containing it; select them with
-  ``result["record_kind"] == 4`` to compare runs at common times.
+  ``result["record_kind"] == 4`` to compare runs at common times;
+* 5 ``RECORD_FORCE_PEAK``: a candidate's normal-force maximum over the
+  compression phase ending at a penetration maximum (``dF/dt = 0``, located on
+  the dense output; with damping it precedes the penetration maximum), so the
+  maximum of ``J_normal_force`` over the records is the located peak force, not
+  a sampled value.
 
 Status: ``status`` 0 and ``cause`` ``None`` for a run that reached the end;
 ``status`` -1 for a run stopped on divergence, with ``message`` (starting with
@@ -61,9 +68,11 @@ import pinocchio as pin
 from . import dynamics as D
 from .atomic import atomic_write
 from .errors import ResultFileError
-from .simulation import Trajectory
+from .simulation import RECORD_FORCE_PEAK, RECORD_ONSET, RECORD_PEAK, Trajectory
 
 FORMAT_VERSION = 1
+#: event log kind -> the record kind it wrote (``event_kind``)
+_EVENT_KINDS = {"onset": RECORD_ONSET, "peak": RECORD_PEAK, "force_peak": RECORD_FORCE_PEAK}
 LWA = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
 
 
@@ -178,6 +187,7 @@ def make_result(scene_name: str, dynamics: D.DynamicsModel, trajectory: Trajecto
         arrays["event_t"] = np.array([e[0] for e in trajectory.events])
         arrays["event_candidate"] = np.array([e[1] for e in trajectory.events], dtype=int)
         arrays["event_is_onset"] = np.array([e[2] == "onset" for e in trajectory.events])
+        arrays["event_kind"] = np.array([_EVENT_KINDS.get(e[2], -1) for e in trajectory.events], dtype=np.int8)
         arrays["event_value"] = np.array([e[3] for e in trajectory.events])
     return SimulationResult(scene_name, trajectory.status, trajectory.message, trajectory.cause, trajectory.t_end, counts, arrays, metadata)
 

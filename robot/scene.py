@@ -343,7 +343,8 @@ def load_scene(name_or_path: str | Path, **overrides: Any) -> Scene:
     _unknown(solver_table, _SOLVER_KEYS, f"{where} [solver]")
     method = solver_table.get("method", "RK45")
     if method not in METHODS:
-        raise SceneError(f"{where} [solver]: method={method!r} is not on offer; choose one of {', '.join(METHODS)}")
+        hint = " (the CVODE methods need the scikit-sundae package: pip install scikit-sundae)" if method.startswith("CVODE") else ""
+        raise SceneError(f"{where} [solver]: method={method!r} is not on offer{hint}; choose one of {', '.join(METHODS)}")
     w = f"{where} [solver]"
     solver = SolverOptions(
         method,

@@ -21,8 +21,11 @@ time and, after each step:
    one step (both ends out of contact, approaching then receding) is caught by
    sampling the dense output, so no step jumps over a contact;
 3. records the penetration maxima (penetration rate crossing zero downward
-   while in contact) as extra output points, so force peaks are not lost to
-   output sampling.
+   while in contact) as extra output points, and with each the maximum of that
+   candidate's normal force over the compression phase (``dF/dt = 0``; with
+   Lankarani-Nikravesh damping it comes slightly before the penetration maximum,
+   possibly in an earlier step, see :class:`_ForcePeaks`), so force peaks are
+   located, not sampled.
 
 The run returns a :class:`Trajectory` (raw states and event log with status,
 message and counts, like ``scipy.integrate.solve_ivp``);
@@ -134,7 +137,7 @@ class Trajectory:
     t: np.ndarray
     y: np.ndarray  # (n, nq + nv + 2): q, v, actuator work, contact work
     onset_rates: np.ndarray  # (n, n_candidates): contact state used at each record
-    kind: np.ndarray  # (n,) 0 step, 1 contact onset, 2 penetration maximum, 3 start, 4 output grid
+    kind: np.ndarray  # (n,) 0 step, 1 contact onset, 2 penetration maximum, 3 start, 4 output grid, 5 force maximum
     n_steps: int = 0
     n_rejected: int = 0
     n_rhs: int = 0
@@ -142,7 +145,7 @@ class Trajectory:
     n_restarts: int = 0
     cpu_time: float = 0.0
     wall_time: float = 0.0
-    events: list = field(default_factory=list)  # (t, candidate, kind, value)
+    events: list = field(default_factory=list)  # (t, candidate, kind, value): "onset" (approach rate), "peak" (depth), "force_peak" (N)
     n_hidden_contacts: int = 0  # onsets found inside a step whose ends are both out of contact
     max_onset_overshoot: float = 0.0  # deepest penetration (m) at the end of a step cut back to a contact onset
 
@@ -158,6 +161,8 @@ class _Failure(Exception):
 
 
 RECORD_STEP, RECORD_ONSET, RECORD_PEAK, RECORD_START, RECORD_OUTPUT = 0, 1, 2, 3, 4
+#: the maximum of a candidate's normal force over an impact's compression phase (see _ForcePeaks)
+RECORD_FORCE_PEAK = 5
 
 
 def initial_onset_rates(dynamics: D.DynamicsModel) -> np.ndarray:
@@ -181,16 +186,18 @@ def integrate(
     bounds = _penetration_bounds(dynamics, limits)
     t0, t_final = map(float, t_span)
     records_t, records_y, records_onset, records_kind = [], [], [], []
+    records_force: list = []  # per record: normal force per candidate where the step loop probed it (else None)
     events: list = []
     counts = dict(steps=0, rejected=0, rhs_start=0, restarts=0, hidden=0)
     overshoot = [0.0]
     structure = SecondOrderStructure(nq, nv, lambda q, dq: pin.integrate(mechanism.model, q, dq))
 
-    def record(t: float, y: np.ndarray, kind: int) -> None:
+    def record(t: float, y: np.ndarray, kind: int, onset_rates: np.ndarray | None = None, forces: np.ndarray | None = None) -> None:
         records_t.append(t)
         records_y.append(np.array(y))
-        records_onset.append(onset.copy())
+        records_onset.append((onset if onset_rates is None else onset_rates).copy())
         records_kind.append(kind)
+        records_force.append(forces)
 
     output_step = options.output_step
     next_output = [1]  # index k of the next output time k * output_step
@@ -217,8 +224,8 @@ def integrate(
             workspace.rejected_stages += 1
             return np.full(nq + nv + 2, np.inf)
 
-    def probe(t: float, y: np.ndarray) -> tuple[np.ndarray, np.ndarray, float]:
-        """Penetration and its rate per candidate, and the constraint residual, at (t, y)."""
+    def probe(t: float, y: np.ndarray) -> D.Probe:
+        """Penetration, its rate and the normal force per candidate, and the constraint residual, at (t, y)."""
         q = D.normalise_quaternions(mechanism, y[:nq])
         try:
             return D.contact_probe(dynamics, probe_workspace, t, q, y[nq : nq + nv], onset)
@@ -234,6 +241,8 @@ def integrate(
         except ContactError as exc:
             raise _Failure("unphysical pose", f"t={t:.9g} s: {exc}") from None
 
+    force_peaks = _ForcePeaks(dynamics, options, probe_workspace, records_t, records_y, records_onset, records_kind, records_force)
+
     started_cpu, started_wall = time.process_time(), time.perf_counter()
     y0 = np.asarray(y0, dtype=float)
     if y0.shape == (nq + nv,):
@@ -242,11 +251,11 @@ def integrate(
         raise ValueError(f"y0 has shape {y0.shape}; expected ({nq + nv},) or ({nq + nv + 2},) for this model")
     t, y = t0, _normalised_state(mechanism, y0, nq)
     status, cause, message = SUCCESS, None, "the integration reached the end of the time span"
-    record(t, y, RECORD_START)
     try:
-        pen_old, rate_old, _ = probe(t, y)
+        pen_old, rate_old, _, force_old = probe(t, y)
     except _Failure as failure:
         raise ValueError(f"the initial state is not a valid pose ({failure})") from None
+    record(t, y, RECORD_START, forces=force_old)
     for k in np.flatnonzero(pen_old > 0):  # already in contact at the start
         onset[k] = max(rate_old[k], ONSET_RATE_FLOOR)
     first_step = options.first_step
@@ -281,7 +290,7 @@ def integrate(
                     raise _Failure("step size collapse", f"t={t_new:.9g} s: step size {solver.step_size:.3e} s below {limits.min_step:.1e} s")
                 if not _all_finite(y_new):
                     raise _Failure("non-finite state", f"t={t_new:.9g} s: the state is not finite")
-                pen_new, rate_new, residual = probe(t_new, y_new)
+                pen_new, rate_new, residual, force_new = probe(t_new, y_new)
                 dense = None
                 flags = _step_flags(pen_old, rate_old, pen_new, rate_new, bounds)
                 # --- contact onset (terminal) ---
@@ -305,8 +314,8 @@ def integrate(
                 if candidates_t:
                     t_event = min(candidates_t)[0]
                     y_event = _normalised_state(mechanism, dense(t_event), nq)
-                    pen_e, rate_e, _ = probe(t_event, y_event)
-                    _record_peaks(dense, probe, pen_old, rate_old, t_old, t_event, record, events, mechanism, nq)
+                    pen_e, rate_e, _, force_e = probe(t_event, y_event)
+                    _record_peaks(dense, probe, pen_old, rate_old, t_old, t_event, record, events, mechanism, nq, force_peaks, onset)
                     # every candidate touching at the event starts its impact now (simultaneous
                     # onsets are common: a tilting bearing meets both flanges at once)
                     starting = sorted({k for tk, k in candidates_t if tk <= t_event} | set(np.flatnonzero((pen_old <= 0) & (pen_e >= 0))))
@@ -314,7 +323,7 @@ def integrate(
                         onset[k] = max(rate_e[k], ONSET_RATE_FLOOR)
                         events.append((t_event, int(k), "onset", float(onset[k])))
                     record_outputs(dense, t_old, t_event)
-                    record(t_event, y_event, RECORD_ONSET)
+                    record(t_event, y_event, RECORD_ONSET, forces=force_e)
                     if t_event <= t:
                         stalled += 1
                         if stalled > MAX_STALLED_RESTARTS:
@@ -346,10 +355,10 @@ def integrate(
                 # --- penetration maxima (non-terminal) ---
                 if flags & _PEAK:
                     dense = dense or dense_output(solver)
-                    _record_peaks(dense, probe, pen_old, rate_old, t_old, t_new, record, events, mechanism, nq, rate_new)
+                    _record_peaks(dense, probe, pen_old, rate_old, t_old, t_new, record, events, mechanism, nq, force_peaks, onset, rate_new)
                 if output_step is not None and next_output[0] * output_step <= t_new + 1e-12 * output_step:
                     record_outputs(dense or dense_output(solver), t_old, t_new)
-                record(t_new, y_new, RECORD_STEP)
+                record(t_new, y_new, RECORD_STEP, forces=force_new)
                 t, y = t_new, y_new
                 pen_old, rate_old = pen_new, rate_new
                 if progress is not None:
@@ -439,8 +448,8 @@ def _hidden_contact(dense, probe, k: int, t_old: float, t_new: float, samples: i
     return None
 
 
-def _record_peaks(dense, probe, pen_old, rate_old, t_old, t_new, record, events, mechanism, nq, rate_new=None) -> None:
-    """Record the penetration maxima inside (t_old, t_new] as extra output points."""
+def _record_peaks(dense, probe, pen_old, rate_old, t_old, t_new, record, events, mechanism, nq, force_peaks, onset, rate_new=None) -> None:
+    """Record the penetration maxima inside (t_old, t_new], and with each its candidate's force maximum."""
     if rate_new is None:
         rate_new = probe(t_new, dense(t_new))[1]
     for k in np.flatnonzero((rate_old > 0) & (rate_new <= 0)):
@@ -454,6 +463,243 @@ def _record_peaks(dense, probe, pen_old, rate_old, t_old, t_new, record, events,
         if pen_peak > 0 and t_old < t_peak < t_new:
             events.append((t_peak, int(k), "peak", float(pen_peak)))
             record(t_peak, y_peak, RECORD_PEAK)
+            found = force_peaks.locate(int(k), dense, t_old, t_peak, t_new, onset)
+            if found is not None:
+                t_force, y_force, force, onset_rates = found
+                events.append((t_force, int(k), "force_peak", force))
+                record(t_force, y_force, RECORD_FORCE_PEAK, onset_rates)
+
+
+#: record kinds at which a solver step starts or ends (the others lie inside a step)
+_BOUNDARY_KINDS = (RECORD_STEP, RECORD_ONSET, RECORD_START)
+#: methods whose accepted step is a function of its start state and size only (explicit Runge-Kutta):
+#: an earlier step is replayed exactly from its recorded start state
+_REPLAYABLE = frozenset({"RK23", "RK45", "DOP853", "RK4"})
+
+
+class _ForcePeaks:
+    """Locates a candidate's normal-force maximum over the compression phase that ends at a penetration maximum.
+
+    With Lankarani-Nikravesh damping the force ``K delta^n (1 + c delta_dot /
+    delta_dot0)`` peaks while the penetration still grows (``dF/dt = 0`` at a
+    positive rate), so the force at the penetration maximum underestimates the
+    peak. Called only for a step that contains a penetration maximum of
+    candidate ``k`` at ``t_peak``: the force is maximised (sampled, then Brent's
+    bounded method on ``-F``) on the step's dense output over ``[t_old, t_peak]``;
+    if the maximum is at the step's start, it lies in an earlier step: the force
+    at the recorded step boundaries, walking back from ``t_old``, brackets it
+    (largest sampled value and its two neighbouring steps), and those steps are
+    replayed from their recorded start states (explicit Runge-Kutta methods:
+    the very same step, so the same dense output; other methods: RK45 at the
+    run's tolerances from the recorded state) and searched the same way. The
+    search never goes back past the candidate's previous penetration maximum
+    (nor its onset, where the force is zero); when the force only decreases
+    since then, no maximum is recorded. The force is the contact law evaluated
+    at the state (on its own Pinocchio data: no right-hand-side call).
+    """
+
+    samples = 6  # force samples per searched interval, bracketing the maximum for the parabolic search
+    xtol = 1e-6  # the maximum's time, relative to the searched interval (the force then exact to ~1e-12: it is flat there)
+    max_walk = 1000  # step boundaries walked back at most
+
+    def __init__(
+        self, dynamics: D.DynamicsModel, options: SolverOptions, workspace: D.DynamicsWorkspace, records_t, records_y, records_onset, records_kind, records_force
+    ):
+        self.dynamics, self.options, self.workspace = dynamics, options, workspace
+        self.records_t, self.records_y, self.records_onset, self.records_kind = records_t, records_y, records_onset, records_kind
+        self.records_force = records_force
+        self.phase_start = np.full(dynamics.n_candidates, -math.inf)  # time of each candidate's last penetration maximum
+        self.replay_workspace: D.DynamicsWorkspace | None = None
+        self.n_replays = 0
+
+    def force(self, t: float, y: np.ndarray, onset_rates: np.ndarray, k: int) -> float:
+        """Normal force (N) of candidate ``k`` at (t, y) (the contact laws at the state's kinematics, :func:`~robot.dynamics.contact_probe`)."""
+        dynamics = self.dynamics
+        nq, nv = dynamics.nq, dynamics.nv
+        q = D.normalise_quaternions(dynamics.mechanism, y[:nq])
+        try:
+            return float(D.contact_probe(dynamics, self.workspace, t, q, np.asarray(y[nq : nq + nv]), onset_rates).normal_force[k])
+        except ContactError:
+            return -math.inf
+
+    def _search(self, dense, a: float, b: float, onset_rates: np.ndarray, k: int) -> tuple[float, float, int]:
+        """(t, F, edge) of the largest force of candidate ``k`` on ``dense`` over [a, b].
+
+        ``edge``: -1 if the largest sample is the first one (the maximum may lie
+        before ``a``), +1 if the last one (after ``b``), else 0.
+        """
+        times = np.linspace(a, b, self.samples + 1)
+        forces = [self.force(float(tt), dense(tt), onset_rates, k) for tt in times]
+        i = int(np.argmax(forces))
+        fun = lambda s: self.force(a + s, dense(a + s), onset_rates, k)  # noqa: E731 - in the offset from a: rounding relative to the step
+        xtol = self.xtol * (b - a)
+        bracket = None
+        if 0 < i < self.samples:
+            bracket = (times[i - 1] - a, times[i] - a, times[i + 1] - a, forces[i - 1], forces[i], forces[i + 1])
+        else:
+            # the largest sample is at an end: is the force still rising just inside it? (an
+            # offset well above the force's rounding, well below the sample spacing)
+            inner = times[i] + (1e-4 if i == 0 else -1e-4) * (b - a)
+            f_inner = self.force(inner, dense(inner), onset_rates, k)
+            if f_inner > forces[i]:
+                if i == 0:
+                    bracket = (0.0, inner - a, times[1] - a, forces[0], f_inner, forces[1])
+                else:
+                    bracket = (times[i - 1] - a, inner - a, b - a, forces[i - 1], f_inner, forces[i])
+        if bracket is None:
+            return float(times[i]), forces[i], (-1 if i == 0 else 1)
+        s, f = _parabolic_maximum(fun, *map(float, bracket), xtol=xtol)
+        return a + s, f, 0
+
+    def _replay(self, i_a: int, i_b: int) -> list:
+        """Dense outputs covering the step between boundary records ``i_a`` and ``i_b``, from the recorded start state."""
+        dynamics, options = self.dynamics, self.options
+        t_a, t_b = self.records_t[i_a], self.records_t[i_b]
+        onset_rates = self.records_onset[i_a]
+        if self.replay_workspace is None:
+            self.replay_workspace = D.make_workspace(dynamics)
+        workspace = self.replay_workspace
+        size = dynamics.nq + dynamics.nv + 2
+
+        def fun(t, y):
+            try:
+                return D.state_derivative(dynamics, workspace, t, y, onset_rates)
+            except ContactError:
+                return np.full(size, np.inf)
+
+        self.n_replays += 1
+        if options.method in _REPLAYABLE:
+            solver = make_solver(options.method, fun, t_a, self.records_y[i_a], t_b, options.rtol, options.atol, math.inf, t_b - t_a)
+        else:
+            solver = make_solver("RK45", fun, t_a, self.records_y[i_a], t_b, options.rtol, options.atol, math.inf, t_b - t_a)
+        dense = []
+        for _ in range(10_000):
+            if solver.status != "running":
+                break
+            solver.step()
+            if solver.status == "failed":
+                break
+            dense.append(solver.dense_output())
+        return dense
+
+    def locate(self, k: int, dense, t_old: float, t_peak: float, t_new: float, onset_rates: np.ndarray):
+        """(t, y, force, onset rates) of candidate ``k``'s force maximum up to just past ``t_peak``, or None.
+
+        The step's part searched runs to its end ``t_new``: an undamped force peaks
+        at the penetration maximum itself, and that maximum is then inside the
+        searched interval. A force still growing at ``t_new`` (a revolute candidate's
+        force also depends on the tilt) or only decreasing since the previous
+        penetration maximum has no maximum in view: None.
+        """
+        t_lo = self.phase_start[k]
+        self.phase_start[k] = t_peak
+        a = max(t_old, t_lo)
+        if not t_new > a:
+            return None
+        t_best, f_best, edge = self._search(dense, a, t_new, onset_rates, k)
+        if edge > 0:
+            return None
+        best = (t_best, f_best, dense, onset_rates) if edge == 0 else None
+        left_end = a
+        if t_old > t_lo:
+            # the force may have peaked (higher) in an earlier step of the same compression phase
+            found = self._earlier(k, t_old, t_lo, f_best if edge < 0 else self.force(t_old, dense(t_old), onset_rates, k), edge < 0)
+            if found is not None:
+                left_end = found[0]
+                if found[1] is not None and (best is None or found[1][1] > best[1]):
+                    best = found[1]
+        if best is None:
+            return None
+        t_best, f_best, dense_best, onset_best = best
+        if t_best <= left_end or not f_best > 0:
+            return None  # the force only decreases over the phase searched: no maximum in it
+        y_best = _normalised_state(self.dynamics.mechanism, dense_best(t_best), self.dynamics.nq)
+        return float(t_best), y_best, float(f_best), onset_best.copy()
+
+    def _earlier(self, k: int, t_old: float, t_lo: float, f_old: float, falling: bool):
+        """The compression phase's earlier steps: (left end searched, best (t, F, dense, onset) or None).
+
+        The force at every step boundary from ``t_old`` back to the phase start
+        (the previous penetration maximum, the onset, where the force is zero, or
+        the run's start); the largest sampled local maximum (``t_old`` counts when
+        the force is ``falling`` after it) is refined on its two neighbouring steps,
+        replayed.
+        """
+        records_t, records_kind = self.records_t, self.records_kind
+        chain, forces = [], []
+        for i in range(len(records_t) - 1, -1, -1):
+            if records_kind[i] not in _BOUNDARY_KINDS:
+                continue
+            if not chain and records_t[i] != t_old:
+                return None  # the records do not end at the step's start: nothing to walk back over
+            if not chain:
+                f = f_old
+            elif self.records_force[i] is not None:  # probed by the step loop (the same contact law, same state)
+                f = float(self.records_force[i][k])
+            else:
+                f = self.force(records_t[i], self.records_y[i], self.records_onset[i], k)
+            chain.append(i)
+            forces.append(f)
+            if records_t[i] <= t_lo or records_kind[i] == RECORD_START or not f > 0 or len(chain) >= self.max_walk:
+                break
+        left_end = max(records_t[chain[-1]], t_lo)
+        peaks = [p for p in range(len(chain) - 1) if forces[p] >= forces[p + 1] and (forces[p] > forces[p - 1] if p > 0 else falling)]
+        if not peaks:
+            return left_end, None
+        p = max(peaks, key=lambda p: forces[p])
+        best = None
+        intervals = [(chain[p + 1], chain[p])] + ([(chain[p], chain[p - 1])] if p >= 1 else [])
+        for i_a, i_b in intervals:
+            if not records_t[i_b] > records_t[i_a]:
+                continue
+            onset_rates = self.records_onset[i_a]
+            for segment in self._replay(i_a, i_b):
+                lo, hi = max(segment.t_old, t_lo, records_t[i_a]), min(segment.t, records_t[i_b])
+                if not hi > lo:
+                    continue
+                t_found, f_found, _ = self._search(segment, lo, hi, onset_rates, k)
+                if t_found <= left_end:
+                    continue  # the tail of the previous phase's maximum, not a maximum of this one
+                if best is None or f_found > best[1]:
+                    best = (t_found, f_found, segment, onset_rates)
+        return left_end, best
+
+
+def _parabolic_maximum(f, a: float, m: float, b: float, fa: float, fm: float, fb: float, xtol: float, maxiter: int = 60) -> tuple[float, float]:
+    """Maximum of a smooth unimodal ``f`` bracketed by ``a < m < b`` (``f(m) >= f(a), f(b)``): (x, f(x)).
+
+    Successive parabolic interpolation (the vertex of the parabola through the
+    bracket's three points), with a golden-section step into the larger part of
+    the bracket when the vertex falls outside it; stops when the vertex moves by
+    less than ``xtol``. Near a smooth maximum it converges superlinearly: a
+    handful of evaluations.
+    """
+    golden = 0.3819660112501051
+    for _ in range(maxiter):
+        p = (m - a) * (fm - fb)
+        r = (m - b) * (fm - fa)
+        denominator = 2.0 * (p - r)
+        x = m - ((m - a) * p - (m - b) * r) / denominator if denominator != 0.0 else math.nan
+        converged = abs(x - m) < xtol
+        if not a < x < b:
+            x = m + golden * (b - m) if b - m > m - a else m - golden * (m - a)
+            converged = False
+        if x == m:
+            break
+        fx = f(x)
+        if x > m:
+            if fx >= fm:
+                a, fa, m, fm = m, fm, x, fx
+            else:
+                b, fb = x, fx
+        else:
+            if fx >= fm:
+                b, fb, m, fm = m, fm, x, fx
+            else:
+                a, fa = x, fx
+        if converged or b - a < xtol:
+            break
+    return m, fm
 
 
 def _next_first_step(solver, options: SolverOptions) -> float | None:

@@ -9,12 +9,15 @@
 * ``evaluate``, ``configuration_rate``, ``contact_probe`` = their reference forms;
 * the drive table = the exact drive, and falls back to it where it cannot fit;
 * generalized-alpha: second order, Newmark conserves the energy of an oscillator,
-  Lie-group update of quaternions; CVODE through scikit-sundae (if installed).
+  Lie-group update of quaternions; CVODE through scikit-sundae.
 """
 
 from __future__ import annotations
 
 import math
+import os
+import subprocess
+import sys
 from pathlib import Path
 
 import numpy as np
@@ -186,6 +189,17 @@ def test_placement_buffer_follows_pinocchio_data(misaligned):
             np.testing.assert_array_equal(view[k, 9:], data.oMf[k].translation)
 
 
+def test_compiled_right_hand_side_runs_as_plain_python():
+    """``CLEARANCE_CONTACT_JIT=0``: the kernels of ``robot.rhs_kernels`` run as Python, same answers."""
+    env = dict(os.environ, CLEARANCE_CONTACT_JIT="0")
+    selection = "state_derivative_equals_reference or python_law or placement_buffer"
+    proc = subprocess.run(
+        [sys.executable, "-m", "pytest", "-q", "-x", "-p", "no:cacheprovider", __file__, "-k", selection],
+        cwd=Path(__file__).resolve().parents[1], env=env, capture_output=True, text=True, timeout=300,
+    )
+    assert proc.returncode == 0 and "3 passed" in proc.stdout, proc.stdout[-3000:] + proc.stderr[-3000:]
+
+
 def test_state_derivative_contact_hint_does_not_change_the_result(misaligned):
     """A site flagged 'touching' from the previous call but now out of contact gets no force."""
     dynamics = misaligned.dynamics
@@ -220,13 +234,14 @@ def test_evaluate_and_probe_equal_reference(misaligned):
         np.testing.assert_allclose(evaluation.residual_rate, expected_rate, atol=1e-12)
         reference = reference_state_derivative(dynamics, model.createData(), t, y, onset)
         np.testing.assert_allclose(evaluation.qdd, reference[nq : nq + nv], rtol=1e-11, atol=1e-8)
-        pen, rate, worst = D.contact_probe(dynamics, workspace, t, q, v, onset)
+        pen, rate, worst, force = D.contact_probe(dynamics, workspace, t, q, v, onset)
         pin.forwardKinematics(model, data, q, v)
         pin.updateFramePlacements(model, data)
         for contact in dynamics.contacts:
             result = contact.law.evaluate(*D.element_states(data, model, contact.site), onset[contact.candidates])
             np.testing.assert_allclose(pen[contact.candidates], result.penetration, atol=1e-18)
             np.testing.assert_allclose(rate[contact.candidates], result.penetration_rate, atol=1e-15)
+            np.testing.assert_allclose(force[contact.candidates], result.normal_force, rtol=1e-12, atol=1e-9)
         table_s = D.make_workspace(dynamics).drive(t)[0]
         assert worst == pytest.approx(np.max(np.abs(C.residual(dynamics.constraints, data, q, table_s))), abs=1e-15)
 

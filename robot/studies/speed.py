@@ -81,7 +81,7 @@ def sample_states(run: Run, t_end: float = 0.02) -> dict:
     best: dict = {}
     for t, y, onset in zip(trajectory.t, trajectory.y, trajectory.onset_rates):
         q = D.normalise_quaternions(dynamics.mechanism, y[: dynamics.nq])
-        pen, _, _ = D.contact_probe(dynamics, workspace, float(t), q, y[dynamics.nq : dynamics.nq + dynamics.nv], onset)
+        pen = D.contact_probe(dynamics, workspace, float(t), q, y[dynamics.nq : dynamics.nq + dynamics.nv], onset).penetration
         touching = tuple(bool(np.any(pen[c.candidates] > 0)) for c in dynamics.contacts)
         key = "all joints in contact" if all(touching) else ("some joints in contact" if any(touching) else "no contact")
         if key not in best:
