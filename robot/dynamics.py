@@ -538,11 +538,14 @@ class Probe(NamedTuple):
     normal_force: np.ndarray
 
 
-def contact_probe(dynamics: DynamicsModel, workspace: DynamicsWorkspace, t: float, q: np.ndarray, v: np.ndarray, onset_rates: np.ndarray) -> Probe:
+def contact_probe(
+    dynamics: DynamicsModel, workspace: DynamicsWorkspace, t: float, q: np.ndarray, v: np.ndarray, onset_rates: np.ndarray, residual: bool = True
+) -> Probe:
     """Penetration, penetration rate and normal force of every candidate, and max |Phi|, at (t, q, v).
 
     Kinematics only (no dynamics): what the simulation checks after every step
     (events, failures, force maxima). ``q`` must have unit quaternions.
+    ``residual=False`` skips max |Phi| (reported as NaN; the compiled path only).
     """
     model, data = dynamics.mechanism.model, workspace.data
     compiled = workspace.compiled
@@ -551,7 +554,9 @@ def contact_probe(dynamics: DynamicsModel, workspace: DynamicsWorkspace, t: floa
     if compiled is not None and compiled.laws_compiled:
         pin.computeJointJacobians(model, data, q)
         pin.updateFramePlacements(model, data)
-        worst = K.largest_residual(compiled.placements, compiled.frames_a, compiled.frames_b, q, workspace.drive.values(t), compiled.actuator_q)
+        worst = math.nan
+        if residual:
+            worst = K.largest_residual(compiled.placements, compiled.frames_a, compiled.frames_b, q, workspace.drive.values(t), compiled.actuator_q)
         for index, (law_kernel, parameters, masks, outer, inner, candidates, twists, buffer, _, _) in enumerate(compiled.sites):
             onset = onset_rates[candidates]
             views = workspace.sites[index]
