@@ -498,7 +498,7 @@ class _ForcePeaks:
     at the state (on its own Pinocchio data: no right-hand-side call).
     """
 
-    samples = 4  # force samples per searched interval, bracketing the maximum for the parabolic search
+    samples = 6  # force samples per searched interval, bracketing the maximum for the parabolic search
     xtol = 1e-6  # the maximum's time, relative to the searched interval (the force then exact to ~1e-12: it is flat there)
     max_walk = 1000  # step boundaries walked back at most
     # an earlier local maximum of the step-end forces this far below the current step's maximum is
