@@ -209,7 +209,8 @@ def page(tmp_path_factory) -> Path:
 
 
 def test_animation_is_drawn_and_plays(page, tmp_path):
-    with tempfile.TemporaryDirectory() as profile:
+    # Chromium's helper processes can still write to the profile while it is removed: ignore that
+    with tempfile.TemporaryDirectory(ignore_cleanup_errors=True) as profile:
         process, url = launch(profile)
         try:
             tools = DevTools(url)

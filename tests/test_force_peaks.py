@@ -17,9 +17,12 @@ from scipy.integrate import RK45, solve_ivp
 from robot import dynamics as D
 from robot.results import make_result
 from robot.run import build_run
-from robot.simulation import RECORD_FORCE_PEAK, RECORD_ONSET, RECORD_PEAK, RECORD_START, RECORD_STEP, integrate
+from robot.simulation import SolverOptions, RECORD_FORCE_PEAK, RECORD_ONSET, RECORD_PEAK, RECORD_START, RECORD_STEP, integrate
 
 T_END = 0.0105  # past the first impact's penetration maximum
+# an explicit Runge-Kutta method (its earlier steps are replayed exactly): the tests check the
+# located maxima against the run's own trajectory, whatever the scene's default integrator is
+SOLVER = SolverOptions("RK45", rtol=1e-7, atol=1e-9, max_step=1e-3)
 
 
 @pytest.fixture(scope="module")
@@ -40,7 +43,7 @@ def _force(dynamics, workspace, y, onset) -> float:
 
 def test_force_peak_is_the_maximum_of_the_dense_output_and_precedes_the_penetration_maximum(spherical):
     run = spherical
-    trajectory = integrate(run.dynamics, run.y0, (0.0, T_END), run.scene.solver)
+    trajectory = integrate(run.dynamics, run.y0, (0.0, T_END), SOLVER)
     assert trajectory.success, trajectory.message
     onset, peak, force_peak = _first(trajectory, "onset"), _first(trajectory, "peak"), _first(trajectory, "force_peak")
     assert onset[0] < force_peak[0] < peak[0]  # damping: the force peaks while the penetration still grows
@@ -59,7 +62,7 @@ def test_force_peak_is_the_maximum_of_the_dense_output_and_precedes_the_penetrat
     workspace = D.make_workspace(run.dynamics)
     boundary = np.flatnonzero(np.isin(trajectory.kind, [RECORD_STEP, RECORD_ONSET, RECORD_START]))
     order = boundary[np.argsort(trajectory.t[boundary], kind="stable")]
-    options = run.scene.solver
+    options = SOLVER
     sampled = []
     for i_a, i_b in zip(order[:-1], order[1:]):
         t_a, t_b = trajectory.t[i_a], trajectory.t[i_b]
@@ -87,7 +90,7 @@ def test_force_peak_agrees_with_a_tight_independent_run(spherical):
     runs with another end time differ by that much).
     """
     run = spherical
-    options = dataclasses.replace(run.scene.solver, method="DOP853", rtol=1e-10, atol=1e-12)
+    options = dataclasses.replace(SOLVER, method="DOP853", rtol=1e-10, atol=1e-12)
     trajectory = integrate(run.dynamics, run.y0, (0.0, T_END), options)
     assert trajectory.success, trajectory.message
     located, onset, peak = _first(trajectory, "force_peak"), _first(trajectory, "onset"), _first(trajectory, "peak")
@@ -122,7 +125,7 @@ def test_undamped_force_peaks_at_the_penetration_maximum(tmp_path):
         encoding="utf-8",
     )
     run = build_run(str(path))
-    trajectory = integrate(run.dynamics, run.y0, (0.0, T_END), run.scene.solver)
+    trajectory = integrate(run.dynamics, run.y0, (0.0, T_END), SOLVER)
     assert trajectory.success, trajectory.message
     peak, force_peak = _first(trajectory, "peak"), _first(trajectory, "force_peak")
     assert abs(force_peak[0] - peak[0]) < 1e-9
