@@ -1,7 +1,7 @@
 """Speed against accuracy of every integrator on offer, failure boundaries, RHS speed.
 
     python scripts/work_precision.py [--scene NAME] [--t-end T] [--out DIR]
-        [--quick] [--skip-stability] [--skip-sweep] [--realtime-t-end T] [--methods M1,M2]
+        [--quick] [--skip-stability] [--skip-sweep] [--realtime-t-end T] [--realtime-repeats N] [--methods M1,M2]
         [--tolerances R1,R2] [--steps H1,H2] [--max-step H] [--candidates M:RTOL,...] [--long-horizon]
 
 Writes to DIR (default results/work_precision/SCENE):
@@ -77,9 +77,10 @@ def main() -> int:
     parser.add_argument("--skip-sweep", action="store_true", help="no work-precision sweep")
     parser.add_argument("--skip-stability", action="store_true", help="no stability maps")
     parser.add_argument("--realtime-t-end", type=float, default=2.0, help="horizon of the real-time run (0: skip)")
+    parser.add_argument("--realtime-repeats", type=int, default=3, help="repeats of the scene solver's real-time run (median reported)")
     parser.add_argument(
         "--candidates",
-        default="LSODA:1e-6,LSODA:1e-5,RK45:1e-6,CVODE_BDF:1e-6,CVODE_Adams:1e-5",
+        default="LSODA:1e-6,LSODA:1e-5,RK45:1e-7,CVODE_BDF:1e-6,CVODE_Adams:1e-5",
         help="other METHOD:RTOL (atol = rtol/100, max_step 1e-3) to time over the real-time horizon ('' for none)",
     )
     parser.add_argument(
@@ -214,11 +215,17 @@ def main() -> int:
 
     if args.realtime_t_end > 0:
         say(f"real-time run: the scene's solver over [0, {args.realtime_t_end}] s")
-        real = speed.realtime(run, run.scene.solver, args.realtime_t_end)
+        # repeated: the machine is shared and noisy; the median run is reported, every factor kept
+        repeats = [speed.realtime(run, run.scene.solver, args.realtime_t_end) for _ in range(max(1, args.realtime_repeats))]
+        real = sorted(repeats, key=lambda r: r["realtime_factor"])[len(repeats) // 2]
+        real["realtime_factors_of_repeats"] = [r["realtime_factor"] for r in repeats]
         report["realtime"] = real
         report["realtime_factor"] = real["realtime_factor"]
         report["rhs_us_in_run"] = real["rhs_us_in_run"]
-        say(f"  wall {real['wall_time']:.1f} s for {real['t_reached']:.3g} s simulated: factor {real['realtime_factor']:.2f}, {real['rhs_us_in_run']:.1f} us per rhs in the run")
+        say(
+            f"  wall {real['wall_time']:.1f} s for {real['t_reached']:.3g} s simulated: factor {real['realtime_factor']:.2f} "
+            f"(median of {real['realtime_factors_of_repeats']}), {real['rhs_us_in_run']:.1f} us per rhs in the run"
+        )
         candidates = []
         for spec in filter(None, args.candidates.split(",")):
             method, rtol = spec.split(":")
