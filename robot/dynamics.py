@@ -222,6 +222,15 @@ class CompiledTerms:
                 )
             )
         self.laws_compiled = all(site[0] is not None for site in self.sites)
+        # every site in one compiled call when every law is compiled (rhs_kernels.fused_sites)
+        self.fused = None
+        if self.sites and self.laws_compiled:
+            self.fused = K.fused_sites(tuple(site[0] for site in self.sites))
+            self.fused_arguments = tuple(
+                value
+                for _, parameters, masks, outer, inner, candidates, twists, buffer, w_outer, w_inner in self.sites
+                for value in (parameters, masks, outer, inner, candidates.start, candidates.stop, twists, buffer, w_outer, w_inner)
+            )
 
     @classmethod
     def for_dynamics(cls, dynamics: DynamicsModel, data: pin.Data, kernel: C.ConstraintKernel) -> "CompiledTerms | None":
@@ -500,9 +509,16 @@ def _compiled_state_derivative(
     )
     tau = compiled.tau
     tau[:] = 0.0
-    # the compiled laws are called from here: a numba function given another as an argument
-    # pays ~7 us of dispatch per call, more than the law itself
-    for index, (law_kernel, parameters, masks, outer, inner, candidates, twists, buffer, w_outer, w_inner) in enumerate(compiled.sites):
+    if compiled.fused is not None:
+        code = compiled.fused(placements, jacobian, v, onset_rates, tau, *compiled.fused_arguments)
+        if code != 0:
+            index = code // 16 - 1
+            candidates = compiled.sites[index][5]
+            _raise_contact_error(dynamics, workspace, index, compiled.sites[index][6], onset_rates[candidates], t, code % 16)
+    for index, (law_kernel, parameters, masks, outer, inner, candidates, twists, buffer, w_outer, w_inner) in enumerate(
+        () if compiled.fused is not None else compiled.sites
+    ):
+        # the sites one by one: a law without a compiled kernel is among them
         onset = onset_rates[candidates]
         views = workspace.sites[index]
         K.site_twists(placements, jacobian, masks, outer, inner, v, twists)

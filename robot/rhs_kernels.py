@@ -36,7 +36,7 @@ import ctypes
 import numpy as np
 import pinocchio as pin
 
-from clearance_contact.compiled import jit
+from clearance_contact.compiled import JIT_ENABLED, jit
 
 SE3_FLOATS = 12  # 3x3 rotation (column-major) + translation
 
@@ -244,3 +244,54 @@ def power_series(coefficients, x, out):
         for k in range(n - 2, -1, -1):
             value = value * x + coefficients[k, j]
         out[j] = value
+
+
+_FUSED_SITES: dict = {}
+
+
+def fused_sites(law_kernels: tuple):
+    """One compiled function that evaluates every clearance joint of a mechanism and adds ``J^T w`` to ``tau``.
+
+    ``law_kernels``: the sites' compiled law kernels, in order. numba cannot take
+    a compiled function as an argument cheaply (a dispatcher argument costs ~7 us
+    a call), so the function is generated for this tuple of kernels (bound as
+    globals) and compiled on first use (~1 s, once per process and tuple).
+    Signature: ``(placements, J, v, onset_rates, tau, *site_arguments)`` with,
+    per site, ``parameters, masks, frame_outer, frame_inner, first, last,
+    twists, out, wrench_outer, wrench_inner``; returns 0, or ``16 * (index + 1)
+    + status`` for the first site whose law returned a nonzero status (``tau``
+    then holds the sites before it).
+    """
+    function = _FUSED_SITES.get(law_kernels)
+    if function is not None:
+        return function
+    names = ["placements", "J", "v", "onset_rates", "tau"]
+    body = []
+    for i in range(len(law_kernels)):
+        site = [f"{name}_{i}" for name in ("parameters", "masks", "outer", "inner", "first", "last", "twists", "out", "w_outer", "w_inner")]
+        names += site
+        p, m, o, n, a, b, tw, out, wo, wi = site
+        body += [
+            f"    site_twists(placements, J, {m}, {o}, {n}, v, {tw})",
+            f"    status = kernel_{i}({p}, placements[{o}, 0:9].reshape((3, 3)).T, placements[{o}, 9:12], {tw}[0],"
+            f" placements[{n}, 0:9].reshape((3, 3)).T, placements[{n}, 9:12], {tw}[1], onset_rates[{a}:{b}], {out})",
+            "    if status != 0:",
+            f"        return 16 * {i + 1} + status",
+            f"    add_site_wrenches(placements, J, {m}, {o}, {n}, {out}, {wo}, {wi}, tau)",
+        ]
+    source = f"def fused({', '.join(names)}):\n" + "\n".join(body + ["    return 0"]) + "\n"
+    namespace = {"site_twists": site_twists, "add_site_wrenches": add_site_wrenches}
+    namespace.update({f"kernel_{i}": kernel for i, kernel in enumerate(law_kernels)})
+    exec(compile(source, f"<robot.rhs_kernels.fused_sites {len(law_kernels)}>", "exec"), namespace)
+    function = _jit_uncached(namespace["fused"])
+    _FUSED_SITES[law_kernels] = function
+    return function
+
+
+def _jit_uncached(function):
+    """``numba.njit`` without the disk cache (generated code has no file to cache against), or the function itself."""
+    if not JIT_ENABLED:
+        return function
+    import numba
+
+    return numba.njit(cache=False)(function)

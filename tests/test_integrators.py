@@ -189,6 +189,17 @@ def test_placement_buffer_follows_pinocchio_data(misaligned):
             np.testing.assert_array_equal(view[k, 9:], data.oMf[k].translation)
 
 
+def test_compiled_sites_report_a_failing_law_with_its_message(misaligned):
+    """A law that refuses its input inside the fused compiled call raises the law's own ContactError."""
+    dynamics = misaligned.dynamics
+    workspace = D.make_workspace(dynamics)
+    assert workspace.compiled.fused is not None
+    y = np.concatenate([misaligned.y0, [0.0, 0.0]])
+    y[dynamics.nq + dynamics.nv - 1] = np.nan  # a non-finite velocity reaches the contact laws
+    with pytest.raises(ContactError, match="non-finite"):
+        D.state_derivative(dynamics, workspace, 0.0, y, np.full(dynamics.n_candidates, 0.1))
+
+
 def test_compiled_right_hand_side_runs_as_plain_python():
     """``CLEARANCE_CONTACT_JIT=0``: the kernels of ``robot.rhs_kernels`` run as Python, same answers."""
     env = dict(os.environ, CLEARANCE_CONTACT_JIT="0")
