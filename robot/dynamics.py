@@ -231,6 +231,20 @@ class CompiledTerms:
                 for _, parameters, masks, outer, inner, candidates, twists, buffer, w_outer, w_inner in self.sites
                 for value in (parameters, masks, outer, inner, candidates.start, candidates.stop, twists, buffer, w_outer, w_inner)
             )
+            self.probe_tau = np.zeros(model.nv)  # the probe's J^T w (unused; the fused call writes it)
+        # per site: candidate slice and views of its law's penetration, rate and normal force outputs
+        self.site_outputs = []
+        for contact, site in zip(dynamics.contacts, self.sites):
+            law, buffer, k = contact.law, site[7], contact.law.n_candidates
+            if buffer is not None:
+                self.site_outputs.append(
+                    (
+                        contact.candidates,
+                        buffer[law.PENETRATION : law.PENETRATION + k],
+                        buffer[law.PENETRATION_RATE : law.PENETRATION_RATE + k],
+                        buffer[law.NORMAL_FORCE : law.NORMAL_FORCE + k],
+                    )
+                )
 
     @classmethod
     def for_dynamics(cls, dynamics: DynamicsModel, data: pin.Data, kernel: C.ConstraintKernel) -> "CompiledTerms | None":
@@ -573,18 +587,15 @@ def contact_probe(
         worst = math.nan
         if residual:
             worst = K.largest_residual(compiled.placements, compiled.frames_a, compiled.frames_b, q, workspace.drive.values(t), compiled.actuator_q)
-        for index, (law_kernel, parameters, masks, outer, inner, candidates, twists, buffer, _, _) in enumerate(compiled.sites):
-            onset = onset_rates[candidates]
-            views = workspace.sites[index]
-            K.site_twists(compiled.placements, compiled.jacobian, masks, outer, inner, v, twists)
-            status = law_kernel(parameters, views.outer_rotation, views.outer_position, twists[0], views.inner_rotation, views.inner_position, twists[1], onset, buffer)
-            if status != 0:
-                _raise_contact_error(dynamics, workspace, index, twists, onset, t, status)
-            k = candidates.stop - candidates.start
-            law = views.law
-            pen[candidates] = buffer[law.PENETRATION : law.PENETRATION + k]
-            rate[candidates] = buffer[law.PENETRATION_RATE : law.PENETRATION_RATE + k]
-            force[candidates] = buffer[law.NORMAL_FORCE : law.NORMAL_FORCE + k]
+        if compiled.fused is not None:
+            code = compiled.fused(compiled.placements, compiled.jacobian, v, onset_rates, compiled.probe_tau, *compiled.fused_arguments)
+            if code != 0:
+                index = code // 16 - 1
+                _raise_contact_error(dynamics, workspace, index, compiled.sites[index][6], onset_rates[compiled.sites[index][5]], t, code % 16)
+        for candidates, penetration, penetration_rate, normal_force in compiled.site_outputs:
+            pen[candidates] = penetration
+            rate[candidates] = penetration_rate
+            force[candidates] = normal_force
         return Probe(pen, rate, worst, force)
     pin.forwardKinematics(model, data, q, v)
     pin.updateFramePlacements(model, data)
