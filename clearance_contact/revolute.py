@@ -499,6 +499,30 @@ def _write3(out, offset, x, y, z):
 
 
 @jit
+def _entries(matrix):
+    """The 9 entries of a (3, 3) array, row by row, as floats (any memory layout)."""
+    return (
+        matrix[0, 0], matrix[0, 1], matrix[0, 2],
+        matrix[1, 0], matrix[1, 1], matrix[1, 2],
+        matrix[2, 0], matrix[2, 1], matrix[2, 2],
+    )
+
+
+@jit
+def _force_point_arms(out, k, pjx, pjy, pjz, dpx, dpy, dpz):
+    """Candidate ``k``'s normal n and the lever arms P - o_j, P - o_b of its force point
+    P = point_outer + delta_c / 2 n (``dp = o_j - o_b``)."""
+    nx = out[NORMAL + 3 * k]
+    ny = out[NORMAL + 3 * k + 1]
+    nz = out[NORMAL + 3 * k + 2]
+    half = 0.5 * out[CENTROID_DEPTH + k]
+    rjx = out[POINT_OUTER + 3 * k] + half * nx - pjx
+    rjy = out[POINT_OUTER + 3 * k + 1] + half * ny - pjy
+    rjz = out[POINT_OUTER + 3 * k + 2] + half * nz - pjz
+    return nx, ny, nz, rjx, rjy, rjz, rjx + dpx, rjy + dpy, rjz + dpz
+
+
+@jit
 def revolute_wrenches(outer_position, inner_position, out):
     """Write ``out[WRENCH_OUTER:WRENCH_INNER + 6]`` from the forces in ``out`` (module docstring).
 
@@ -522,16 +546,7 @@ def revolute_wrenches(outer_position, inner_position, out):
         force_n = out[NORMAL_FORCE + k]
         if force_n <= 0.0:
             continue
-        nx = out[NORMAL + 3 * k]
-        ny = out[NORMAL + 3 * k + 1]
-        nz = out[NORMAL + 3 * k + 2]
-        half = 0.5 * out[CENTROID_DEPTH + k]
-        rjx = out[POINT_OUTER + 3 * k] + half * nx - pjx  # P - o_j
-        rjy = out[POINT_OUTER + 3 * k + 1] + half * ny - pjy
-        rjz = out[POINT_OUTER + 3 * k + 2] + half * nz - pjz
-        rbx = rjx + dpx  # P - o_b
-        rby = rjy + dpy
-        rbz = rjz + dpz
+        nx, ny, nz, rjx, rjy, rjz, rbx, rby, rbz = _force_point_arms(out, k, pjx, pjy, pjz, dpx, dpy, dpz)
         t_spin = out[SPIN_TORQUE + k]
         fx = -force_n * nx + out[FRICTION_FORCE + 3 * k]
         fy = -force_n * ny + out[FRICTION_FORCE + 3 * k + 1]
@@ -562,15 +577,7 @@ def revolute_penetration_kernel(parameters, outer_rotation, outer_position, inne
     ``STATUS_NONFINITE_INPUT`` (non-finite rotations) or ``STATUS_AXIS_TILT``; NaN
     positions give NaN penetrations with ``STATUS_OK``.
     """
-    r00 = outer_rotation[0, 0]
-    r01 = outer_rotation[0, 1]
-    r02 = outer_rotation[0, 2]
-    r10 = outer_rotation[1, 0]
-    r11 = outer_rotation[1, 1]
-    r12 = outer_rotation[1, 2]
-    r20 = outer_rotation[2, 0]
-    r21 = outer_rotation[2, 1]
-    r22 = outer_rotation[2, 2]
+    r00, r01, r02, r10, r11, r12, r20, r21, r22 = _entries(outer_rotation)
     ujx = inner_rotation[0, 2]
     ujy = inner_rotation[1, 2]
     ujz = inner_rotation[2, 2]
@@ -622,24 +629,8 @@ def revolute_kernel(
         outer_rotation, outer_position, outer_twist, inner_rotation, inner_position, inner_twist, onset_rates
     ):
         return STATUS_NONFINITE_INPUT
-    r00 = outer_rotation[0, 0]
-    r01 = outer_rotation[0, 1]
-    r02 = outer_rotation[0, 2]
-    r10 = outer_rotation[1, 0]
-    r11 = outer_rotation[1, 1]
-    r12 = outer_rotation[1, 2]
-    r20 = outer_rotation[2, 0]
-    r21 = outer_rotation[2, 1]
-    r22 = outer_rotation[2, 2]
-    j00 = inner_rotation[0, 0]
-    j01 = inner_rotation[0, 1]
-    j02 = inner_rotation[0, 2]
-    j10 = inner_rotation[1, 0]
-    j11 = inner_rotation[1, 1]
-    j12 = inner_rotation[1, 2]
-    j20 = inner_rotation[2, 0]
-    j21 = inner_rotation[2, 1]
-    j22 = inner_rotation[2, 2]
+    r00, r01, r02, r10, r11, r12, r20, r21, r22 = _entries(outer_rotation)
+    j00, j01, j02, j10, j11, j12, j20, j21, j22 = _entries(inner_rotation)
     pbx = outer_position[0]
     pby = outer_position[1]
     pbz = outer_position[2]
@@ -902,16 +893,7 @@ def revolute_kernel(
         force_n = out[NORMAL_FORCE + k]
         ftx = fty = ftz = spin = t_spin = 0.0
         if force_n > 0.0 and code != FRICTION_NONE:
-            nx = out[NORMAL + 3 * k]
-            ny = out[NORMAL + 3 * k + 1]
-            nz = out[NORMAL + 3 * k + 2]
-            half = 0.5 * out[CENTROID_DEPTH + k]
-            rjx = out[POINT_OUTER + 3 * k] + half * nx - pjx  # P - o_j
-            rjy = out[POINT_OUTER + 3 * k + 1] + half * ny - pjy
-            rjz = out[POINT_OUTER + 3 * k + 2] + half * nz - pjz
-            rbx = rjx + dpx  # P - o_b
-            rby = rjy + dpy
-            rbz = rjz + dpz
+            nx, ny, nz, rjx, rjy, rjz, rbx, rby, rbz = _force_point_arms(out, k, pjx, pjy, pjz, dpx, dpy, dpz)
             sx_ = vjx + (wjy * rjz - wjz * rjy) - vbx - (wby * rbz - wbz * rby)
             sy_ = vjy + (wjz * rjx - wjx * rjz) - vby - (wbz * rbx - wbx * rbz)
             sz_ = vjz + (wjx * rjy - wjy * rjx) - vbz - (wbx * rby - wby * rbx)

@@ -74,9 +74,8 @@ def support_mask(model: pin.Model, frame_ids) -> np.ndarray:
 
 
 @jit
-def point_velocity(placements, J, mask_row, frame, v, out):
-    """out[0:3] = v_p, out[3:6] = omega of frame ``frame``'s origin (world axes); the LWA twist."""
-    px, py, pz = placements[frame, 9], placements[frame, 10], placements[frame, 11]
+def _spatial_velocity(J, mask_row, v):
+    """(v_0, omega) = J v over the columns of ``mask_row`` (6 floats; J or its time derivative)."""
     vx = vy = vz = wx = wy = wz = 0.0
     for c in range(J.shape[1]):
         if mask_row[c]:
@@ -87,6 +86,14 @@ def point_velocity(placements, J, mask_row, frame, v, out):
             wx += J[3, c] * vc
             wy += J[4, c] * vc
             wz += J[5, c] * vc
+    return vx, vy, vz, wx, wy, wz
+
+
+@jit
+def point_velocity(placements, J, mask_row, frame, v, out):
+    """out[0:3] = v_p, out[3:6] = omega of frame ``frame``'s origin (world axes); the LWA twist."""
+    px, py, pz = placements[frame, 9], placements[frame, 10], placements[frame, 11]
+    vx, vy, vz, wx, wy, wz = _spatial_velocity(J, mask_row, v)
     out[0] = vx + wy * pz - wz * py
     out[1] = vy + wz * px - wx * pz
     out[2] = vz + wx * py - wy * px
@@ -109,23 +116,8 @@ def _add_point_jacobian(J, mask_row, px, py, pz, sign, phi_q, row):
 def _point_bias_acceleration(placements, J, dJ, mask_row, frame, v):
     """Classical acceleration of frame ``frame``'s origin at zero joint acceleration (world axes)."""
     px, py, pz = placements[frame, 9], placements[frame, 10], placements[frame, 11]
-    vx = vy = vz = wx = wy = wz = 0.0
-    ax = ay = az = bx = by = bz = 0.0
-    for c in range(J.shape[1]):
-        if mask_row[c]:
-            vc = v[c]
-            vx += J[0, c] * vc
-            vy += J[1, c] * vc
-            vz += J[2, c] * vc
-            wx += J[3, c] * vc
-            wy += J[4, c] * vc
-            wz += J[5, c] * vc
-            ax += dJ[0, c] * vc
-            ay += dJ[1, c] * vc
-            az += dJ[2, c] * vc
-            bx += dJ[3, c] * vc
-            by += dJ[4, c] * vc
-            bz += dJ[5, c] * vc
+    vx, vy, vz, wx, wy, wz = _spatial_velocity(J, mask_row, v)
+    ax, ay, az, bx, by, bz = _spatial_velocity(dJ, mask_row, v)
     # v_p = v_0 + omega x p;  a_p = a_0 + alpha x p + omega x v_p
     upx = vx + wy * pz - wz * py
     upy = vy + wz * px - wx * pz
