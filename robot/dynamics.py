@@ -142,8 +142,6 @@ class DynamicsWorkspace:
     data: pin.Data
     rhs_calls: int = 0
     rejected_stages: int = 0  # trial stages in an absurd pose (see robot.simulation)
-    simple_q: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=int))
-    simple_v: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=int))
     kernel: C.ConstraintKernel | None = None  # Phi, Phi_q, gamma on ``data`` (views bound once)
     sites: tuple = ()  # per contact site: _SiteViews on ``data``
     drive: Callable | None = None  # the drive through its interpolation table (see DriveTable)
@@ -153,17 +151,10 @@ class DynamicsWorkspace:
 
 def make_workspace(dynamics: DynamicsModel) -> DynamicsWorkspace:
     model = dynamics.mechanism.model
-    simple_q, simple_v = [], []
-    for j in range(1, model.njoints):
-        if model.nqs[j] == model.nvs[j]:
-            simple_q.extend(range(model.idx_qs[j], model.idx_qs[j] + model.nqs[j]))
-            simple_v.extend(range(model.idx_vs[j], model.idx_vs[j] + model.nvs[j]))
     data = model.createData()
     kernel = C.ConstraintKernel(dynamics.constraints, data)
     return DynamicsWorkspace(
         data,
-        simple_q=np.array(simple_q, dtype=int),
-        simple_v=np.array(simple_v, dtype=int),
         kernel=kernel,
         sites=tuple(_SiteViews(contact, data) for contact in dynamics.contacts),
         drive=drive_table(dynamics.drive),
@@ -231,7 +222,6 @@ class CompiledTerms:
                 for _, parameters, masks, outer, inner, candidates, twists, buffer, w_outer, w_inner in self.sites
                 for value in (parameters, masks, outer, inner, candidates.start, candidates.stop, twists, buffer, w_outer, w_inner)
             )
-            self.probe_tau = np.zeros(model.nv)  # the probe's J^T w (unused; the fused call writes it)
         # per site: candidate slice and views of its law's penetration, rate and normal force outputs
         self.site_outputs = []
         for contact, site in zip(dynamics.contacts, self.sites):
@@ -281,7 +271,6 @@ class DriveTable:
         self.width = float(width)
         self.degree = int(degree)
         self.rtol = float(rtol)
-        self.powers = np.arange(self.degree + 1, dtype=float)
         n = self.degree + 1
         self.nodes = np.cos(np.pi * (np.arange(n) + 0.5) / n)[::-1]
         self.check_points = np.linspace(-1.0, 1.0, checks + 2)[1:-1] + 0.5 / (checks + 1)
@@ -302,7 +291,9 @@ class DriveTable:
         ok = True
         for x in self.check_points:
             exact = np.concatenate(drive.drive(middle + half * x))
-            error = np.abs((x ** self.powers) @ coefficients - exact).reshape(3, m).max(axis=1)
+            fitted = np.empty(3 * m)
+            K.power_series(coefficients, x, fitted)
+            error = np.abs(fitted - exact).reshape(3, m).max(axis=1)
             if not np.all(error <= self.rtol * np.maximum(scale, 1e-300)):
                 ok = False
                 break
@@ -523,20 +514,35 @@ def _compiled_state_derivative(
     )
     tau = compiled.tau
     tau[:] = 0.0
+    _compiled_sites(dynamics, workspace, compiled, t, v, onset_rates, tau)
+    out = np.empty(nq + nv + 2)
+    out[nq : nq + nv] = pin.forwardDynamics(model, data, tau, compiled.phi_q, compiled.drift)
+    out[:nq] = pin.tangentMapProduct(model, q, v[:, None])
+    # actuator power: driving force (= Pinocchio's multiplier of the driving row) times the actuator rate
+    K.write_powers(data.lambda_c, compiled.n_closure_rows, v, compiled.actuator_v, tau, out, nq + nv)
+    return out
+
+
+def _compiled_sites(
+    dynamics: DynamicsModel, workspace: DynamicsWorkspace, compiled: CompiledTerms, t: float, v: np.ndarray, onset_rates: np.ndarray, tau: np.ndarray
+) -> None:
+    """Evaluate every clearance joint at the kinematics in ``workspace.data``; ``tau += J^T w`` (compiled path).
+
+    All laws compiled: one fused call (each law's outputs in its buffer). Otherwise site
+    by site, a law without a compiled kernel through its ``evaluate``.
+    """
+    placements, jacobian = compiled.placements, compiled.jacobian
     if compiled.fused is not None:
         code = compiled.fused(placements, jacobian, v, onset_rates, tau, *compiled.fused_arguments)
         if code != 0:
             index = code // 16 - 1
-            candidates = compiled.sites[index][5]
-            _raise_contact_error(dynamics, workspace, index, compiled.sites[index][6], onset_rates[candidates], t, code % 16)
-    for index, (law_kernel, parameters, masks, outer, inner, candidates, twists, buffer, w_outer, w_inner) in enumerate(
-        () if compiled.fused is not None else compiled.sites
-    ):
-        # the sites one by one: a law without a compiled kernel is among them
+            _raise_contact_error(dynamics, workspace, index, compiled.sites[index][6], onset_rates[compiled.sites[index][5]], t, code % 16)
+        return
+    for index, (law_kernel, parameters, masks, outer, inner, candidates, twists, buffer, w_outer, w_inner) in enumerate(compiled.sites):
         onset = onset_rates[candidates]
         views = workspace.sites[index]
         K.site_twists(placements, jacobian, masks, outer, inner, v, twists)
-        if law_kernel is None:  # a law without a compiled kernel: its Python evaluate
+        if law_kernel is None:
             result = views.law.evaluate(views.outer_rotation, views.outer_position, twists[0], views.inner_rotation, views.inner_position, twists[1], onset)
             buffer = np.concatenate([result.wrench_outer, result.wrench_inner])
         else:
@@ -544,12 +550,6 @@ def _compiled_state_derivative(
             if status != 0:
                 _raise_contact_error(dynamics, workspace, index, twists, onset, t, status)
         K.add_site_wrenches(placements, jacobian, masks, outer, inner, buffer, w_outer, w_inner, tau)
-    out = np.empty(nq + nv + 2)
-    out[nq : nq + nv] = pin.forwardDynamics(model, data, tau, compiled.phi_q, compiled.drift)
-    out[:nq] = pin.tangentMapProduct(model, q, v[:, None])
-    # actuator power: driving force (= Pinocchio's multiplier of the driving row) times the actuator rate
-    K.write_powers(data.lambda_c, compiled.n_closure_rows, v, compiled.actuator_v, tau, out, nq + nv)
-    return out
 
 
 def _raise_contact_error(dynamics: DynamicsModel, workspace: DynamicsWorkspace, index: int, twists, onset, t: float, status: int):
@@ -587,11 +587,8 @@ def contact_probe(
         worst = math.nan
         if residual:
             worst = K.largest_residual(compiled.placements, compiled.frames_a, compiled.frames_b, q, workspace.drive.values(t), compiled.actuator_q)
-        if compiled.fused is not None:
-            code = compiled.fused(compiled.placements, compiled.jacobian, v, onset_rates, compiled.probe_tau, *compiled.fused_arguments)
-            if code != 0:
-                index = code // 16 - 1
-                _raise_contact_error(dynamics, workspace, index, compiled.sites[index][6], onset_rates[compiled.sites[index][5]], t, code % 16)
+        # compiled.tau receives the (unused) J^T w: every right-hand side starts by zeroing it
+        _compiled_sites(dynamics, workspace, compiled, t, v, onset_rates, compiled.tau)
         for candidates, penetration, penetration_rate, normal_force in compiled.site_outputs:
             pen[candidates] = penetration
             rate[candidates] = penetration_rate

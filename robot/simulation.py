@@ -502,9 +502,6 @@ class _ForcePeaks:
     samples = 6  # force samples per searched interval, bracketing the maximum for the parabolic search
     xtol = 1e-6  # the maximum's time, relative to the searched interval (the force then exact to ~1e-12: it is flat there)
     max_walk = 1000  # step boundaries walked back at most
-    # an earlier local maximum of the step-end forces this far below the current step's maximum is
-    # not replayed (between step ends the force rises less than this above its sampled maximum)
-    replay_margin = 0.05
 
     def __init__(
         self, dynamics: D.DynamicsModel, options: SolverOptions, workspace: D.DynamicsWorkspace, records_t, records_y, records_onset, records_kind, records_force
@@ -514,7 +511,6 @@ class _ForcePeaks:
         self.records_force = records_force
         self.phase_start = np.full(dynamics.n_candidates, -math.inf)  # time of each candidate's last penetration maximum
         self.replay_workspace: D.DynamicsWorkspace | None = None
-        self.n_replays = 0
 
     def force(self, t: float, y: np.ndarray, onset_rates: np.ndarray, k: int) -> float:
         """Normal force (N) of candidate ``k`` at (t, y) (the contact laws at the state's kinematics, :func:`~robot.dynamics.contact_probe`)."""
@@ -571,7 +567,6 @@ class _ForcePeaks:
             except ContactError:
                 return np.full(size, np.inf)
 
-        self.n_replays += 1
         if options.method not in _REPLAYABLE:
             # a multistep method's step cannot be redone alone: the cubic Hermite interpolant of its
             # two accepted end states and their derivatives (two right-hand sides), on the method's
@@ -610,9 +605,7 @@ class _ForcePeaks:
         left_end = a
         if t_old > t_lo:
             # the force may have peaked (higher) in an earlier step of the same compression phase
-            found = self._earlier(
-                k, t_old, t_lo, f_best if edge < 0 else self.force(t_old, dense(t_old), onset_rates, k), edge < 0, f_best if edge == 0 else 0.0
-            )
+            found = self._earlier(k, t_old, t_lo, f_best if edge < 0 else self.force(t_old, dense(t_old), onset_rates, k), edge < 0)
             if found is not None:
                 left_end = found[0]
                 if found[1] is not None and (best is None or found[1][1] > best[1]):
@@ -625,7 +618,7 @@ class _ForcePeaks:
         y_best = _normalised_state(self.dynamics.mechanism, dense_best(t_best), self.dynamics.nq)
         return float(t_best), y_best, float(f_best), onset_best.copy()
 
-    def _earlier(self, k: int, t_old: float, t_lo: float, f_old: float, falling: bool, f_current: float = 0.0):
+    def _earlier(self, k: int, t_old: float, t_lo: float, f_old: float, falling: bool):
         """The compression phase's earlier steps: (left end searched, best (t, F, dense, onset) or None).
 
         The force at every step boundary from ``t_old`` back to the phase start
@@ -656,8 +649,6 @@ class _ForcePeaks:
         if not peaks:
             return left_end, None
         p = max(peaks, key=lambda p: forces[p])
-        if forces[p] < (1.0 - self.replay_margin) * f_current:
-            return left_end, None  # no earlier step comes near the maximum found in the current one
         best = None
         intervals = [(chain[p + 1], chain[p])] + ([(chain[p], chain[p - 1])] if p >= 1 else [])
         for i_a, i_b in intervals:

@@ -16,13 +16,13 @@ def test_the_five_scenes_are_shipped():
 
 @pytest.mark.parametrize("name", ["spherical", "revolute", "compound", "compound_misaligned"])
 def test_clearance_scene_short_horizon(name):
-    """Each scene runs with its own solver; penetrations stay far below the clearance (0.1 mm),
-    the constraint drift within the engineering bound of the work-precision study (1e-6 m; the
-    multistep defaults drift ~3e-8 m, RK45 at rtol 1e-7 ~1e-14 m)."""
+    """Each scene runs with its own solver; penetrations stay far below the clearance (0.1 mm);
+    with Baumgarte stabilisation the constraint drift is held at the integrator's error level,
+    i.e. within a few absolute tolerances of the scene's solver."""
     run = build_run(name, duration=0.03)
     result = run_scene(run)
     assert result.success, result.message
-    assert result["constraint_residual"].max() < 1e-6
+    assert result["constraint_residual"].max() < 10 * run.scene.solver.atol
     for joint in result.clearance_joints:
         assert result[f"{joint}_penetration"].max() < 0.2 * 1e-4
         assert np.all(np.isfinite(result[f"{joint}_normal_force"]))
