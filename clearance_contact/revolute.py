@@ -509,6 +509,22 @@ def _entries(matrix):
 
 
 @jit
+def _write_candidate(out, k, nx, ny, nz, ox, oy, oz, delta_c, spin_radius, rate_c, onset_rate, f_el, ce):
+    """Candidate ``k``'s normal, contact points, centroid depth, spin radius and normal force into ``out``.
+
+    The normal force is the L-N hysteresis on the distributed resultant (unit
+    "penetration", stiffness F_el, exponent 1): F = F_el [1 + 3(1-ce^2)/4 rate_c /
+    max(onset, floor)], clamped >= 0; 0 out of contact (F_el = 0).
+    """
+    _write3(out, NORMAL + 3 * k, nx, ny, nz)
+    _write3(out, POINT_OUTER + 3 * k, ox, oy, oz)
+    _write3(out, POINT_INNER + 3 * k, ox + delta_c * nx, oy + delta_c * ny, oz + delta_c * nz)
+    out[CENTROID_DEPTH + k] = delta_c
+    out[SPIN_RADIUS + k] = spin_radius
+    out[NORMAL_FORCE + k] = lankarani_nikravesh(1.0, rate_c, onset_rate, f_el, 1.0, ce) if f_el > 0.0 else 0.0
+
+
+@jit
 def _force_point_arms(out, k, pjx, pjy, pjz, dpx, dpy, dpz):
     """Candidate ``k``'s normal n and the lever arms P - o_j, P - o_b of its force point
     P = point_outer + delta_c / 2 n (``dp = o_j - o_b``)."""
@@ -803,14 +819,7 @@ def revolute_kernel(
         ox = pbx + z_c * ubx + r_b1 * rx
         oy = pby + z_c * uby + r_b1 * ry
         oz = pbz + z_c * ubz + r_b1 * rz
-        _write3(out, NORMAL + 3 * k, nx, ny, nz)
-        _write3(out, POINT_OUTER + 3 * k, ox, oy, oz)
-        _write3(out, POINT_INNER + 3 * k, ox + delta_c * nx, oy + delta_c * ny, oz + delta_c * nz)
-        out[CENTROID_DEPTH + k] = delta_c
-        out[SPIN_RADIUS + k] = spin_radius
-        # L-N hysteresis on the distributed resultant (unit "penetration", stiffness F_el,
-        # exponent 1): F = F_el [1 + 3(1-ce^2)/4 rate_c / max(onset, floor)], clamped >= 0
-        out[NORMAL_FORCE + k] = lankarani_nikravesh(1.0, rate_c, onset_rates[k], f_el, 1.0, ce) if f_el > 0.0 else 0.0
+        _write_candidate(out, k, nx, ny, nz, ox, oy, oz, delta_c, spin_radius, rate_c, onset_rates[k], f_el, ce)
 
     # ---- axial candidates 1 (top face) and 3 (bottom face) --------------------------------
     n_a = parameters[_P_AXIAL_EXPONENT]
@@ -867,12 +876,7 @@ def revolute_kernel(
         ox = pbx + ring * hl * ubx + cx * b1x + cy * b2x
         oy = pby + ring * hl * uby + cx * b1y + cy * b2y
         oz = pbz + ring * hl * ubz + cx * b1z + cy * b2z
-        _write3(out, NORMAL + 3 * k, nx, ny, nz)
-        _write3(out, POINT_OUTER + 3 * k, ox, oy, oz)
-        _write3(out, POINT_INNER + 3 * k, ox + delta_c * nx, oy + delta_c * ny, oz + delta_c * nz)
-        out[CENTROID_DEPTH + k] = delta_c
-        out[SPIN_RADIUS + k] = spin_radius
-        out[NORMAL_FORCE + k] = lankarani_nikravesh(1.0, rate_c, onset_rates[k], f_el, 1.0, ce) if f_el > 0.0 else 0.0
+        _write_candidate(out, k, nx, ny, nz, ox, oy, oz, delta_c, spin_radius, rate_c, onset_rates[k], f_el, ce)
 
     if not math.isfinite(out[PENETRATION] + out[PENETRATION + 1] + out[PENETRATION + 2] + out[PENETRATION + 3]):
         return STATUS_NONFINITE_PENETRATION

@@ -335,18 +335,22 @@ _DUMP = """
 import json, sys
 import numpy as np
 sys.path.insert(0, "tests")
-from test_contact_kernels import FRICTIONS, random_state, revolute, run_kernel, spherical
+from test_contact_kernels import seeded_cases
 from clearance_contact.compiled import JIT_ENABLED
-result = {"jit": JIT_ENABLED, "cases": []}
-for make in (revolute, spherical):
-    for name in sorted(FRICTIONS):
-        joint = make(FRICTIONS[name])
-        rng = np.random.default_rng(7)
-        for _ in range(40):
-            status, out = run_kernel(joint.kernel, joint, random_state(rng, joint))
-            result["cases"].append([make.__name__, name, status, out.tolist()])
+result = {"jit": JIT_ENABLED, "cases": [[law, friction, status, out.tolist()] for law, friction, status, out, _ in seeded_cases()]}
 print(json.dumps(result))
 """
+
+
+def seeded_cases():
+    """(law name, friction name, status, out, joint) of both kernels on fixed-seed random states."""
+    for make in (revolute, spherical):
+        for name in sorted(FRICTIONS):
+            joint = make(FRICTIONS[name])
+            rng = np.random.default_rng(7)
+            for _ in range(40):
+                status, out = run_kernel(joint.kernel, joint, random_state(rng, joint))
+                yield make.__name__, name, status, out, joint
 
 
 @requires_jit
@@ -356,17 +360,11 @@ def test_compiled_matches_plain_python_run() -> None:
     assert proc.returncode == 0, proc.stderr[-4000:]
     plain = json.loads(proc.stdout)
     assert plain["jit"] is False
-    index = 0
-    for make in (revolute, spherical):
-        for name in sorted(FRICTIONS):
-            joint = make(FRICTIONS[name])
-            rng = np.random.default_rng(7)
-            for _ in range(40):
-                status, out = run_kernel(joint.kernel, joint, random_state(rng, joint))
-                law, friction, status_py, out_py = plain["cases"][index]
-                assert (law, friction, status) == (make.__name__, name, status_py)
-                assert_same(out, np.array(out_py), joint)
-                index += 1
+    cases = list(seeded_cases())
+    assert len(cases) == len(plain["cases"])
+    for (law, friction, status, out, joint), (law_py, friction_py, status_py, out_py) in zip(cases, plain["cases"]):
+        assert (law, friction, status) == (law_py, friction_py, status_py)
+        assert_same(out, np.array(out_py), joint)
 
 
 def test_imports_and_works_without_numba(tmp_path: Path) -> None:
