@@ -509,6 +509,16 @@ def _entries(matrix):
 
 
 @jit
+def _transpose_times(r00, r01, r02, r10, r11, r12, r20, r21, r22, x, y, z):
+    """R^T (x, y, z): a world vector in the bearing frame (R given row by row)."""
+    return (
+        r00 * x + r10 * y + r20 * z,
+        r01 * x + r11 * y + r21 * z,
+        r02 * x + r12 * y + r22 * z,
+    )
+
+
+@jit
 def _write_candidate(out, k, nx, ny, nz, ox, oy, oz, delta_c, spin_radius, rate_c, onset_rate, f_el, ce):
     """Candidate ``k``'s normal, contact points, centroid depth, spin radius and normal force into ``out``.
 
@@ -600,12 +610,8 @@ def revolute_penetration_kernel(parameters, outer_rotation, outer_position, inne
     dpx = inner_position[0] - outer_position[0]
     dpy = inner_position[1] - outer_position[1]
     dpz = inner_position[2] - outer_position[2]
-    ax = r00 * dpx + r10 * dpy + r20 * dpz
-    ay = r01 * dpx + r11 * dpy + r21 * dpz
-    az = r02 * dpx + r12 * dpy + r22 * dpz
-    dx = r00 * ujx + r10 * ujy + r20 * ujz
-    dy = r01 * ujx + r11 * ujy + r21 * ujz
-    dz = r02 * ujx + r12 * ujy + r22 * ujz
+    ax, ay, az = _transpose_times(r00, r01, r02, r10, r11, r12, r20, r21, r22, dpx, dpy, dpz)
+    dx, dy, dz = _transpose_times(r00, r01, r02, r10, r11, r12, r20, r21, r22, ujx, ujy, ujz)
     if not dz > _MIN_AXIS_COSINE:
         return STATUS_AXIS_TILT if math.isfinite(dz) else STATUS_NONFINITE_INPUT
     r_j = parameters[_P_JOURNAL_RADIUS]
@@ -674,21 +680,15 @@ def revolute_kernel(
     dpx = pjx - pbx
     dpy = pjy - pby
     dpz = pjz - pbz
-    ax = r00 * dpx + r10 * dpy + r20 * dpz
-    ay = r01 * dpx + r11 * dpy + r21 * dpz
-    az = r02 * dpx + r12 * dpy + r22 * dpz
-    dx = r00 * j02 + r10 * j12 + r20 * j22
-    dy = r01 * j02 + r11 * j12 + r21 * j22
-    dz = r02 * j02 + r12 * j12 + r22 * j22
+    ax, ay, az = _transpose_times(r00, r01, r02, r10, r11, r12, r20, r21, r22, dpx, dpy, dpz)
+    dx, dy, dz = _transpose_times(r00, r01, r02, r10, r11, r12, r20, r21, r22, j02, j12, j22)
     if not dz > _MIN_AXIS_COSINE:
         return STATUS_AXIS_TILT
     # d(o_j - o_b)/dt seen from the bearing: dv - w_b x dp
     qx = vjx - vbx - (wby * dpz - wbz * dpy)
     qy = vjy - vby - (wbz * dpx - wbx * dpz)
     qz = vjz - vbz - (wbx * dpy - wby * dpx)
-    adx = r00 * qx + r10 * qy + r20 * qz
-    ady = r01 * qx + r11 * qy + r21 * qz
-    adz = r02 * qx + r12 * qy + r22 * qz
+    adx, ady, adz = _transpose_times(r00, r01, r02, r10, r11, r12, r20, r21, r22, qx, qy, qz)
     # d(u_j)/dt seen from the bearing: (w_j - w_b) x u_j
     wrx = wjx - wbx
     wry = wjy - wby
@@ -696,9 +696,7 @@ def revolute_kernel(
     ux = wry * j22 - wrz * j12
     uy = wrz * j02 - wrx * j22
     uz = wrx * j12 - wry * j02
-    ddx = r00 * ux + r10 * uy + r20 * uz
-    ddy = r01 * ux + r11 * uy + r21 * uz
-    ddz = r02 * ux + r12 * uy + r22 * uz
+    ddx, ddy, ddz = _transpose_times(r00, r01, r02, r10, r11, r12, r20, r21, r22, ux, uy, uz)
 
     # ---- radial: slices z = 0, +l, -l; e(z) = m + z t ------------------------------
     tx = dx / dz
