@@ -24,8 +24,6 @@ import ast
 import re
 from pathlib import Path
 
-import pytest
-
 ROOT = Path(__file__).resolve().parents[1]
 PACKAGE = ROOT / "robot"
 DYNAMICS_DOC = ROOT / "docs" / "dynamics.md"
@@ -177,16 +175,3 @@ def test_every_record_kind_is_documented():
     in_docs = {name: int(code) for code, name in re.findall(r"^\| (\d+) \| `(RECORD_\w+)` \|", table.group(1), re.M)}
     assert in_results == kinds, f"robot/results.py docstring documents {in_results}, the code defines {kinds}"
     assert in_docs == kinds, f"docs/dynamics.md 'Record kinds' documents {in_docs}, the code defines {kinds}"
-
-
-def test_the_validation_event_loop_uses_the_same_record_codes():
-    """robot/validation/event_loop.py writes record_kind too (codes 0-3): same names, same values."""
-    source = (PACKAGE / "validation" / "event_loop.py").read_text(encoding="utf-8")
-    kinds = record_kinds()
-    match = re.search(r"^(RECORD_\w+(?:, RECORD_\w+)*) = ([\d, ]+)$", source, re.M)
-    if match is None:
-        pytest.skip("the event loop defines no RECORD_* constants")
-    names = [n.strip() for n in match.group(1).split(",")]
-    values = [int(v) for v in match.group(2).split(",")]
-    for name, value in zip(names, values):
-        assert kinds.get(name) == value, f"event_loop {name} = {value}, robot.simulation has {kinds.get(name)}"

@@ -109,9 +109,11 @@ def test_force_peak_agrees_with_a_tight_independent_run(spherical):
     i = int(np.argmax(forces))
     assert 0 < i < len(grid) - 1
     fine = np.linspace(grid[i - 1], grid[i + 1], 401)
-    reference = max(_force(run.dynamics, workspace, solution.sol(t), rates) for t in fine)
+    fine_forces = [_force(run.dynamics, workspace, solution.sol(t), rates) for t in fine]
+    reference = max(fine_forces)
     assert located[3] == pytest.approx(reference, rel=1e-6)
-    assert located[0] == pytest.approx(fine[0], abs=2 * (grid[1] - grid[0]))
+    # the time of a flat maximum: within a tenth of the coarse grid's spacing of the fine grid's argmax
+    assert located[0] == pytest.approx(fine[int(np.argmax(fine_forces))], abs=0.1 * (grid[1] - grid[0]))
     sampled = _force(run.dynamics, workspace, solution.sol(peak[0]), rates)
     assert abs(sampled / reference - 1) > 1e-3  # what the penetration maximum alone gave: 0.8 % low
 

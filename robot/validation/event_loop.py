@@ -42,11 +42,10 @@ from scipy.integrate import DOP853, RK23, RK45
 from scipy.optimize import brentq
 
 from clearance_contact import ONSET_RATE_FLOOR, ContactError
-from robot.simulation import first_contact_time
+from robot.simulation import RECORD_ONSET, RECORD_PEAK, RECORD_START, RECORD_STEP, first_contact_time
 
 #: the methods this loop supports (explicit Runge-Kutta with dense output)
 SOLVERS = {"RK45": RK45, "RK23": RK23, "DOP853": DOP853}
-RECORD_STEP, RECORD_ONSET, RECORD_PEAK, RECORD_START = 0, 1, 2, 3
 MAX_STALLED_RESTARTS = 20
 
 
