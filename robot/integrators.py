@@ -174,7 +174,6 @@ class GeneralizedAlpha(OdeSolver):
         self.acc = self.f[nq : nq + nv].copy()  # a_n
         self.pseudo = self.acc.copy()  # x_n (a_0 = x_0)
         self.iteration_matrix_inverse = None
-        self.n_jacobians = 0
         self.n_newton = 0
         self.n_rejected = 0
         self.failure_cause = None
@@ -219,7 +218,7 @@ class GeneralizedAlpha(OdeSolver):
             trial[:nq] = self.structure.integrate(q, dq)
             jac_q[:, j] = (self.fun(t, trial)[nq : nq + nv] - base) / step
             dq[j] = 0.0
-        self.n_jacobians += 1
+        self.njev += 1  # OdeSolver's count of Jacobian evaluations
         scale = (1.0 - self.alpha_f) / (1.0 - self.alpha_m)
         matrix = np.eye(nv) - self.beta * scale * h * h * jac_q - self.gamma * scale * h * jac_v
         if not np.all(np.isfinite(matrix)):
@@ -344,7 +343,7 @@ class _CVODEBase(OdeSolver):
     cvode_method = "BDF"
     min_step = 1e-12
 
-    def __init__(self, fun, t0, y0, t_bound, rtol=1e-3, atol=1e-6, max_step=np.inf, first_step=None, vectorized=False, **extraneous):
+    def __init__(self, fun, t0, y0, t_bound, rtol=1e-3, atol=1e-6, max_step=np.inf, first_step=None, vectorized=False, jac=None, **extraneous):
         if _CVODE is None:
             raise ValueError("CVODE needs the scikit-sundae package (pip install scikit-sundae)")
         super().__init__(fun, t0, y0, t_bound, vectorized)
@@ -367,6 +366,12 @@ class _CVODEBase(OdeSolver):
         )
         if first_step is not None:
             options["first_step"] = float(first_step)
+        if jac is not None:
+            # CVODE's dense matrix, filled in place (``jac(t, y, out)``)
+            def jacfn(t, y, yp, matrix):
+                jac(t, y, matrix)
+
+            options["jacfn"] = jacfn
         self._cvode = _CVODE(rhsfn, **options)
         result = self._cvode.init_step(float(t0), np.asarray(y0, dtype=float))
         if result.status < 0:
@@ -417,6 +422,9 @@ if _CVODE is not None:
 
 FIXED_STEP_METHODS = {"RK4", "GenAlpha", "Newmark"}
 
+#: methods whose Newton iterations take a user Jacobian (``jacobian=`` in :func:`make_solver`)
+JACOBIAN_METHODS = frozenset({"BDF", "Radau", "LSODA", "CVODE_BDF", "CVODE_Adams"})
+
 #: methods that need the second-order structure of the state (``structure=`` in :func:`make_solver`)
 STRUCTURED_METHODS = {"GenAlpha", "Newmark"}
 
@@ -435,8 +443,14 @@ def make_solver(
     max_step: float,
     first_step: float | None,
     structure: SecondOrderStructure | None = None,
+    jacobian: Callable[..., np.ndarray] | None = None,
 ) -> OdeSolver:
-    """Instantiate the named method (see :data:`METHODS`)."""
+    """Instantiate the named method (see :data:`METHODS`).
+
+    ``jacobian(t, y, out=None) -> df/dy`` (a new array when ``out`` is None): the
+    iteration matrix's Jacobian for the methods in :data:`JACOBIAN_METHODS`
+    (ignored by the others); None lets the solver difference ``fun`` itself.
+    """
     if method not in METHODS:
         raise ValueError(f"integrator method={method!r} is not on offer; choose one of {', '.join(METHODS)}")
     cls = METHODS[method]
@@ -445,6 +459,8 @@ def make_solver(
     if method in FIXED_STEP_METHODS:
         return cls(fun, t0, y0, t_bound, first_step=first_step)
     kwargs = dict(rtol=rtol, atol=atol, max_step=max_step)
+    if jacobian is not None and method in JACOBIAN_METHODS:
+        kwargs["jac"] = jacobian  # scipy keeps the returned matrix (a new one per call); CVODE fills its own
     if first_step is not None:
         kwargs["first_step"] = min(first_step, abs(t_bound - t0))
     return cls(fun, t0, y0, t_bound, **kwargs)

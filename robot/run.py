@@ -115,6 +115,7 @@ def run_scene(run: Run, progress: Callable[[float], None] | None = None) -> Simu
         "rtol": scene.solver.rtol,
         "atol": scene.solver.atol,
         "max_step": scene.solver.max_step,
+        "jacobian": scene.solver.jacobian,
         "baumgarte": [scene.baumgarte.alpha, scene.baumgarte.beta],
         "duration": scene.duration,
         "actuated_joints": list(run.mechanism.actuated_joints),

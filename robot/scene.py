@@ -27,7 +27,8 @@ Schema (defaults in brackets)::
     # platform, instead of preset: x, z, roll, pitch, yaw = {offset, amplitudes, harmonics, phases}
     # joints: one table per actuated joint: P1 = {offset, rate, amplitudes, harmonics, phases}
 
-    [solver]   method ["RK45"], rtol [1e-7], atol [1e-9], max_step [1e-3], first_step
+    [solver]   method ["RK45"], rtol [1e-7], atol [1e-9], max_step [1e-3], first_step,
+               jacobian ["structured"] (implicit methods' Newton matrix; or "finite-difference")
     [baumgarte] alpha [5.0], beta [5.0]
     [limits]   penetration_ratio [0.5], max_residual [1e-4], min_step [1e-13], max_wall_time
 
@@ -72,12 +73,13 @@ from clearance_contact import (
 from .errors import SceneError
 from .simulation import FailureLimits, SolverOptions
 from .integrators import FIXED_STEP_METHODS, METHODS
+from .state_jacobian import JACOBIAN_CHOICES, STRUCTURED
 from .dynamics import Baumgarte
 
 SCENE_DIR = Path(__file__).resolve().parent / "scenes"
 
 _TOP_KEYS = {"name", "description", "mechanism", "end_effector", "duration", "trajectory", "solver", "baumgarte", "limits", "materials", "clearance", "initial", "extends"}
-_SOLVER_KEYS = {"method", "rtol", "atol", "max_step", "first_step"}
+_SOLVER_KEYS = {"method", "rtol", "atol", "max_step", "first_step", "jacobian"}
 _BAUMGARTE_KEYS = {"alpha", "beta"}
 _LIMIT_KEYS = {"penetration_ratio", "max_residual", "min_step", "max_wall_time"}
 _MATERIAL_KEYS = {"youngs_modulus", "poisson_ratio"}
@@ -346,12 +348,16 @@ def load_scene(name_or_path: str | Path, **overrides: Any) -> Scene:
         hint = " (the CVODE methods need the scikit-sundae package: pip install scikit-sundae)" if method.startswith("CVODE") else ""
         raise SceneError(f"{where} [solver]: method={method!r} is not on offer{hint}; choose one of {', '.join(METHODS)}")
     w = f"{where} [solver]"
+    jacobian = solver_table.get("jacobian", STRUCTURED)
+    if jacobian not in JACOBIAN_CHOICES:
+        raise SceneError(f"{w}: jacobian={jacobian!r} is not on offer; choose one of {', '.join(JACOBIAN_CHOICES)}")
     solver = SolverOptions(
         method,
         _number(solver_table, "rtol", w, 1e-7, low=1e-14, high=1e-1),
         _number(solver_table, "atol", w, 1e-9, low=1e-16, high=1e-1),
         _number(solver_table, "max_step", w, 1e-3, low=0.0, low_open=True),
         _number(solver_table, "first_step", w, None, low=0.0, low_open=True),
+        jacobian=jacobian,
     )
     if method in FIXED_STEP_METHODS and solver.first_step is None:
         raise SceneError(f"{w}: the fixed-step method {method} needs first_step (its step size)")

@@ -47,7 +47,9 @@ from clearance_contact import ONSET_RATE_FLOOR, ContactError
 from clearance_contact.compiled import jit
 
 from . import dynamics as D
-from .integrators import FIXED_STEP_METHODS, STAGES, SecondOrderStructure, make_solver
+from . import state_jacobian as SJ
+from .integrators import FIXED_STEP_METHODS, JACOBIAN_METHODS, STAGES, SecondOrderStructure, make_solver
+from .state_jacobian import JACOBIAN_CHOICES, STRUCTURED
 
 SUCCESS, FAILED = 0, -1
 #: restarts at one instant before the run is declared failed (contact events that make no progress)
@@ -98,7 +100,10 @@ class SolverOptions:
     on by default, off only to study what it guards against
     (``scripts/work_precision.py``). ``output_step``: also record the state at every
     multiple of it, from the steps' dense output (record kind 4), so that runs can
-    be compared at common times.
+    be compared at common times. ``jacobian``: the iteration matrix of the implicit
+    methods (``robot.integrators.JACOBIAN_METHODS``): ``"structured"`` (default;
+    :mod:`robot.state_jacobian`, where the compiled right-hand side applies) or
+    ``"finite-difference"`` (the solver differences the right-hand side itself).
     """
 
     method: str = "RK45"
@@ -108,6 +113,11 @@ class SolverOptions:
     first_step: float | None = None
     hidden_contacts: bool = True
     output_step: float | None = None
+    jacobian: str = STRUCTURED
+
+    def __post_init__(self) -> None:
+        if self.jacobian not in JACOBIAN_CHOICES:
+            raise ValueError(f"solver jacobian={self.jacobian!r} is not on offer; choose one of {', '.join(JACOBIAN_CHOICES)}")
 
 
 @dataclass(frozen=True)
@@ -143,6 +153,7 @@ class Trajectory:
     n_rhs: int = 0
     n_events: int = 0
     n_restarts: int = 0
+    n_jacobians: int = 0  # Newton-matrix Jacobians of implicit methods (structured or differenced)
     cpu_time: float = 0.0
     wall_time: float = 0.0
     events: list = field(default_factory=list)  # (t, candidate, kind, value): "onset" (approach rate), "peak" (depth), "force_peak" (N)
@@ -188,7 +199,7 @@ def integrate(
     records_t, records_y, records_onset, records_kind = [], [], [], []
     records_force: list = []  # per record: normal force per candidate where the step loop probed it (else None)
     events: list = []
-    counts = dict(steps=0, rejected=0, rhs_start=0, restarts=0, hidden=0)
+    counts = dict(steps=0, rejected=0, rhs_start=0, restarts=0, hidden=0, jacobians=0)
     overshoot = [0.0]
     structure = SecondOrderStructure(nq, nv, lambda q, dq: pin.integrate(mechanism.model, q, dq))
 
@@ -223,6 +234,19 @@ def integrate(
             # shrinks it. Accepted states are still checked and a real blow-up is reported.
             workspace.rejected_stages += 1
             return np.full(nq + nv + 2, np.inf)
+
+    state_jacobian = None
+    if options.jacobian == STRUCTURED and options.method in JACOBIAN_METHODS:
+        state_jacobian = SJ.for_workspace(dynamics, workspace)
+
+    def jacobian(t: float, y: np.ndarray, out: np.ndarray | None = None) -> np.ndarray:
+        out = np.empty((nq + nv + 2, nq + nv + 2)) if out is None else out
+        try:
+            return state_jacobian(t, y, onset, out)
+        except ContactError:
+            # a contact law refused a perturbed input: difference the right-hand side instead
+            out[:] = SJ.finite_difference_jacobian(rhs, t, y)
+            return out
 
     def probe(t: float, y: np.ndarray) -> D.Probe:
         """Penetration, its rate and the normal force per candidate, and the constraint residual, at (t, y)."""
@@ -274,7 +298,9 @@ def integrate(
         while t < t_final:
             workspace.rhs_calls = 0
             dense_calls[0] = 0
-            solver = make_solver(options.method, rhs, t, y, t_final, options.rtol, options.atol, options.max_step, first_step, structure)
+            solver = make_solver(
+                options.method, rhs, t, y, t_final, options.rtol, options.atol, options.max_step, first_step, structure, None if state_jacobian is None else jacobian
+            )
             start_calls = workspace.rhs_calls
             accepted_here = 0
             restarted = False
@@ -364,6 +390,7 @@ def integrate(
                 if progress is not None:
                     progress(t)
             n_rhs_total += workspace.rhs_calls
+            counts["jacobians"] += int(getattr(solver, "njev", 0) or 0)
             stages = STAGES.get(options.method)
             if stages is not None:
                 attempts = (workspace.rhs_calls - start_calls - dense_calls[0]) / stages
@@ -401,6 +428,7 @@ def integrate(
         n_rhs=n_rhs_total,
         n_events=len(events),
         n_restarts=counts["restarts"],
+        n_jacobians=counts["jacobians"],
         cpu_time=time.process_time() - started_cpu,
         wall_time=time.perf_counter() - started_wall,
         events=events,

@@ -15,9 +15,6 @@
 from __future__ import annotations
 
 import math
-import os
-import subprocess
-import sys
 from pathlib import Path
 
 import numpy as np
@@ -33,6 +30,8 @@ from robot.run import build_run
 from robot.scene import misalignment_rotation
 from robot.simulation import RECORD_OUTPUT, SolverOptions, integrate
 from robot.studies.speed import reference_state_derivative
+
+from conftest import assert_passes_as_plain_python
 
 DATA = Path(__file__).resolve().parent / "data"
 LWA = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
@@ -120,20 +119,6 @@ def test_state_derivative_equals_reference_in_and_out_of_contact(misaligned):
     assert touched >= 10  # the sample has states in contact (contact power non-zero)
 
 
-class _PythonLaw:
-    """A contact law seen only through its public Python API (no compiled kernel)."""
-
-    def __init__(self, law):
-        self._law = law
-        self.n_candidates = law.n_candidates
-
-    def evaluate(self, *args):
-        return self._law.evaluate(*args)
-
-    def penetration(self, *args):
-        return self._law.penetration(*args)
-
-
 def test_compiled_right_hand_side_covers_the_shipped_scenes():
     """Every shipped scene (spherical closures only) runs the compiled path; revolute closures do not."""
     for name in ("ideal", "spherical", "revolute", "compound", "compound_misaligned"):
@@ -145,17 +130,10 @@ def test_compiled_right_hand_side_covers_the_shipped_scenes():
     assert any(rows.closure.kind == "revolute" for rows in C.constraint_set(crank, driven=True).closures)
 
 
-def test_compiled_path_with_a_python_law_equals_reference(misaligned):
+def test_compiled_path_with_a_python_law_equals_reference(misaligned, with_python_laws):
     """A law without a compiled kernel is evaluated through its Python API inside the compiled path."""
     dynamics = misaligned.dynamics
-    wrapped = D.DynamicsModel(
-        dynamics.mechanism,
-        dynamics.constraints,
-        tuple(D.ContactSite(c.site, _PythonLaw(c.law), c.first_candidate) for c in dynamics.contacts),
-        dynamics.drive,
-        dynamics.baumgarte,
-        dynamics.end_effector_frame,
-    )
+    wrapped = with_python_laws(dynamics)
     workspace = D.make_workspace(wrapped)
     assert workspace.compiled is not None and all(site[0] is None for site in workspace.compiled.sites)
     compiled_workspace = D.make_workspace(dynamics)
@@ -202,13 +180,7 @@ def test_compiled_sites_report_a_failing_law_with_its_message(misaligned):
 
 def test_compiled_right_hand_side_runs_as_plain_python():
     """``CLEARANCE_CONTACT_JIT=0``: the kernels of ``robot.rhs_kernels`` run as Python, same answers."""
-    env = dict(os.environ, CLEARANCE_CONTACT_JIT="0")
-    selection = "state_derivative_equals_reference or python_law or placement_buffer"
-    proc = subprocess.run(
-        [sys.executable, "-m", "pytest", "-q", "-x", "-p", "no:cacheprovider", __file__, "-k", selection],
-        cwd=Path(__file__).resolve().parents[1], env=env, capture_output=True, text=True, timeout=300,
-    )
-    assert proc.returncode == 0 and "3 passed" in proc.stdout, proc.stdout[-3000:] + proc.stderr[-3000:]
+    assert_passes_as_plain_python(__file__, "state_derivative_equals_reference or python_law or placement_buffer", 3)
 
 
 def test_state_derivative_contact_hint_does_not_change_the_result(misaligned):

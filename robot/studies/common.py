@@ -39,6 +39,7 @@ class Outcome:
     n_steps: int
     n_rejected: int
     n_rhs: int
+    n_jacobians: int
     n_events: int
     n_hidden_contacts: int
     max_onset_overshoot: float
@@ -70,6 +71,7 @@ class Outcome:
             "steps": self.n_steps,
             "rejected": self.n_rejected,
             "rhs_calls": self.n_rhs,
+            "jacobians": self.n_jacobians,
             "events": self.n_events,
             "hidden_contacts": self.n_hidden_contacts,
             "max_onset_overshoot": self.max_onset_overshoot,
@@ -88,6 +90,7 @@ def options_dict(options: SolverOptions) -> dict:
         "max_step": options.max_step if math.isfinite(options.max_step) else None,
         "first_step": options.first_step,
         "hidden_contacts": options.hidden_contacts,
+        "jacobian": options.jacobian,
     }
 
 
@@ -120,6 +123,7 @@ def simulate(
         n_steps=trajectory.n_steps,
         n_rejected=trajectory.n_rejected,
         n_rhs=trajectory.n_rhs,
+        n_jacobians=trajectory.n_jacobians,
         n_events=sum(1 for e in trajectory.events if e[2] == "onset"),
         n_hidden_contacts=trajectory.n_hidden_contacts,
         max_onset_overshoot=trajectory.max_onset_overshoot,

@@ -1,0 +1,127 @@
+"""The structured Jacobian of the state derivative (``robot.state_jacobian``).
+
+* its stiff blocks (accelerations and powers against positions and velocities,
+  in contact) equal a central-difference Jacobian of the right-hand side;
+* what it leaves out is not stiff: the Newton iterations it steers contract as
+  fast as with the exact matrix at every step size an implicit method uses;
+* it is invariant to the scale of a quaternion, as the right-hand side is;
+* it applies only where it can (compiled path, shipped laws), and a run with it
+  follows the same trajectory as one with the solver's own differences, with far
+  fewer right-hand sides; a bad choice is refused by name.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pinocchio as pin
+import pytest
+
+from robot import dynamics as D
+from robot import state_jacobian as SJ
+from robot.errors import SceneError
+from robot.run import build_run
+from robot.scene import load_scene
+from robot.simulation import SolverOptions, integrate
+from robot.studies.speed import sample_states
+
+from conftest import assert_passes_as_plain_python
+
+
+@pytest.fixture(scope="module")
+def misaligned():
+    return build_run("compound_misaligned")
+
+
+@pytest.fixture(scope="module")
+def states(misaligned):
+    return sample_states(misaligned)
+
+
+def _jacobians(run, t, y, onset):
+    dynamics = run.dynamics
+    n = dynamics.nq + dynamics.nv + 2
+    structured = SJ.for_workspace(dynamics, D.make_workspace(dynamics))(t, y, onset, np.empty((n, n)))
+    workspace = D.make_workspace(dynamics)
+    # small steps: a candidate may have just touched (penetration ~1e-9 m)
+    differenced = SJ.finite_difference_jacobian(lambda tt, yy: D.state_derivative(dynamics, workspace, tt, yy, onset), t, y, relative_step=1e-9)
+    return structured, differenced
+
+
+def test_stiff_blocks_equal_central_differences_in_contact(misaligned, states):
+    dynamics = misaligned.dynamics
+    nq, nv = dynamics.nq, dynamics.nv
+    t, y, onset = states["all joints in contact"]
+    structured, differenced = _jacobians(misaligned, t, y, onset)
+    for rows, what in ((slice(nq, nq + nv), "accelerations"), (slice(nq + nv, nq + nv + 2), "powers")):
+        error = np.linalg.norm(structured[rows] - differenced[rows]) / np.linalg.norm(differenced[rows])
+        assert error < 1e-3, f"{what}: relative error {error:.2e}"
+    # the contact makes these blocks stiff: ~1e8 1/s^2, against ~1e2 out of contact
+    assert np.linalg.norm(differenced[nq : nq + nv, :nq]) > 1e7
+    np.testing.assert_array_equal(structured[:nq, nq : nq + nv], pin.tangentMap(dynamics.mechanism.model, D.normalise_quaternions(dynamics.mechanism, y[:nq])))
+
+
+def test_compiled_kernels_run_as_plain_python():
+    """``CLEARANCE_CONTACT_JIT=0``: ``robot.jacobian_kernels`` run as Python, same checks pass."""
+    assert_passes_as_plain_python(__file__, "stiff_blocks or quaternion_scale", 2)
+
+
+@pytest.mark.parametrize("state", ["initial", "some joints in contact", "all joints in contact"])
+def test_newton_iterations_contract_as_with_the_exact_matrix(misaligned, states, state):
+    """Spectral radius of the Newton error map ``I - (I - g J)^-1 (I - g J~)`` at step-size factors g."""
+    if state not in states:
+        pytest.skip(f"the sample run has no state {state!r}")
+    structured, differenced = _jacobians(misaligned, *states[state])
+    identity = np.eye(structured.shape[0])
+    for gamma in (1e-5, 1e-4, 1e-3):
+        error_map = identity - np.linalg.solve(identity - gamma * differenced, identity - gamma * structured)
+        radius = np.max(np.abs(np.linalg.eigvals(error_map)))
+        assert radius < 1e-2, f"{state}, gamma={gamma}: contraction {radius:.2e}"
+
+
+def test_quaternion_scale_direction_is_annihilated(misaligned, states):
+    """f depends on the normalised quaternions only: the Jacobian along each quaternion itself is zero."""
+    dynamics = misaligned.dynamics
+    model = dynamics.mechanism.model
+    t, y, onset = states["all joints in contact"]
+    structured, _ = _jacobians(misaligned, t, y, onset)
+    quaternions = [slice(model.idx_qs[j] + 3, model.idx_qs[j] + 7) for j in range(1, model.njoints) if model.nqs[j] == 7]
+    assert len(quaternions) == 2
+    for block in quaternions:
+        along = structured[:, block] @ y[block]
+        assert np.max(np.abs(along)) < 1e-9 * np.max(np.abs(structured[:, block]))
+
+
+def test_applies_only_to_the_compiled_path_with_shipped_laws(misaligned, with_python_laws):
+    dynamics = misaligned.dynamics
+    assert SJ.for_workspace(dynamics, D.make_workspace(dynamics)) is not None
+    wrapped = with_python_laws(dynamics)
+    assert SJ.for_workspace(wrapped, D.make_workspace(wrapped)) is None
+    with pytest.raises(ValueError, match="compiled laws"):
+        SJ.StateJacobian(wrapped, D.make_workspace(wrapped))
+
+
+@pytest.mark.parametrize("method, rtol", [("CVODE_BDF", 1e-6), ("BDF", 1e-6)])
+def test_a_run_with_it_follows_the_differenced_run(misaligned, method, rtol):
+    """Same trajectory to the tolerance's order, through the first impacts; far fewer right-hand sides."""
+    runs = {}
+    for jacobian in SJ.JACOBIAN_CHOICES:
+        options = SolverOptions(method, rtol=rtol, atol=rtol * 1e-2, max_step=1e-3, jacobian=jacobian)
+        runs[jacobian] = integrate(misaligned.dynamics, misaligned.y0, (0.0, 0.02), options, misaligned.scene.limits)
+    structured, differenced = runs[SJ.STRUCTURED], runs[SJ.FINITE_DIFFERENCE]
+    assert structured.success and differenced.success
+    assert any(e[2] == "onset" for e in structured.events)
+    nq = misaligned.dynamics.nq
+    assert np.max(np.abs(structured.y[-1, :nq] - differenced.y[-1, :nq])) < 1e-6
+    assert structured.n_jacobians > 0 and differenced.n_jacobians > 0
+    assert structured.n_rhs < 0.75 * differenced.n_rhs, (structured.n_rhs, differenced.n_rhs)
+
+
+def test_an_unknown_choice_is_refused_by_name(tmp_path):
+    with pytest.raises(ValueError, match="jacobian='analytic'.*structured, finite-difference"):
+        SolverOptions("CVODE_BDF", jacobian="analytic")
+    scene = tmp_path / "scene.toml"
+    scene.write_text('extends = "compound_misaligned"\n[solver]\nmethod = "CVODE_BDF"\njacobian = "exact"\n')
+    with pytest.raises(SceneError, match=r"\[solver\]: jacobian='exact' is not on offer"):
+        load_scene(str(scene))
+    scene.write_text('extends = "compound_misaligned"\n[solver]\nmethod = "CVODE_BDF"\njacobian = "finite-difference"\n')
+    assert load_scene(str(scene)).solver.jacobian == SJ.FINITE_DIFFERENCE
