@@ -192,36 +192,52 @@ class CompiledTerms:
         if not kernel.driven:
             self.actuator_q = self.actuator_v = np.zeros(0, dtype=np.int64)
         # per contact site: (compiled law kernel or None, its parameters, support masks, outer
-        # frame, inner frame, candidate slice, twist buffer, law output buffer, wrench offsets)
+        # frame, inner frame, candidate slice, twist buffer, law output buffer, wrench offsets);
+        # the masks, twists and output buffers are views of the arrays of all_sites below
+        laws = [contact.law for contact in dynamics.contacts]
+        # a law's kernel is None when it cannot do everything compiled (e.g. a user-defined friction law)
+        compiled_law = [getattr(law, "kernel", None) is not None and hasattr(law, "kernel_parameters") for law in laws]
+        sizes = [law.output_size if ok else 0 for law, ok in zip(laws, compiled_law)]
+        self.site_outputs_buffer = np.zeros(sum(sizes))
+        self.site_masks = np.zeros((len(laws), 2, model.nv), dtype=np.uint8)
+        self.site_twists = np.zeros((len(laws), 2, 6))
         self.sites = []
-        for contact in dynamics.contacts:
+        offset = 0
+        for index, (contact, ok, size) in enumerate(zip(dynamics.contacts, compiled_law, sizes)):
             law, site = contact.law, contact.site
-            # a law's kernel is None when it cannot do everything compiled (e.g. a user-defined friction law)
-            compiled_law = getattr(law, "kernel", None) is not None and hasattr(law, "kernel_parameters")
+            self.site_masks[index] = K.support_mask(model, [site.outer_frame, site.inner_frame])
             self.sites.append(
                 (
-                    law.kernel if compiled_law else None,
-                    law.kernel_parameters if compiled_law else None,
-                    K.support_mask(model, [site.outer_frame, site.inner_frame]),
+                    law.kernel if ok else None,
+                    np.asarray(law.kernel_parameters, dtype=float) if ok else None,
+                    self.site_masks[index],
                     site.outer_frame,
                     site.inner_frame,
                     contact.candidates,
-                    np.zeros((2, 6)),
-                    np.zeros(law.output_size) if compiled_law else None,
-                    law.WRENCH_OUTER if compiled_law else 0,  # a Python law's wrenches are stacked [outer, inner]
-                    law.WRENCH_INNER if compiled_law else 6,
+                    self.site_twists[index],
+                    self.site_outputs_buffer[offset : offset + size] if ok else None,
+                    law.WRENCH_OUTER if ok else 0,  # a Python law's wrenches are stacked [outer, inner]
+                    law.WRENCH_INNER if ok else 6,
                 )
             )
-        self.laws_compiled = all(site[0] is not None for site in self.sites)
-        # every site in one compiled call when every law is compiled (rhs_kernels.fused_sites)
+            offset += size
+        self.laws_compiled = all(compiled_law)
+        # every site in one compiled call (rhs_kernels.all_sites) when every law is a shipped compiled law
         self.fused = None
-        if self.sites and self.laws_compiled:
-            self.fused = K.fused_sites(tuple(site[0] for site in self.sites))
-            self.fused_arguments = tuple(
-                value
-                for _, parameters, masks, outer, inner, candidates, twists, buffer, w_outer, w_inner in self.sites
-                for value in (parameters, masks, outer, inner, candidates.start, candidates.stop, twists, buffer, w_outer, w_inner)
-            )
+        if self.sites and self.laws_compiled and all(site[0] in K.LAW_IDS for site in self.sites):
+            self.fused = K.all_sites
+            self.site_parameters = np.concatenate([site[1] for site in self.sites])
+            table = np.zeros((len(self.sites), K.SITE_COLUMNS), dtype=np.int64)
+            first_parameter = first_output = 0
+            for row, (kernel, parameters, _, outer, inner, candidates, _, buffer, w_outer, w_inner) in zip(table, self.sites):
+                row[K.SITE_LAW] = K.LAW_IDS[kernel]
+                row[K.SITE_OUTER], row[K.SITE_INNER] = outer, inner
+                row[K.SITE_FIRST], row[K.SITE_LAST] = candidates.start, candidates.stop
+                row[K.SITE_PARAMETERS], row[K.SITE_PARAMETERS_END] = first_parameter, first_parameter + parameters.shape[0]
+                row[K.SITE_OUT], row[K.SITE_OUT_END] = first_output, first_output + buffer.shape[0]
+                row[K.SITE_WRENCH_OUTER], row[K.SITE_WRENCH_INNER] = w_outer, w_inner
+                first_parameter, first_output = first_parameter + parameters.shape[0], first_output + buffer.shape[0]
+            self.site_table = table
         # per site: candidate slice and views of its law's penetration, rate and normal force outputs
         self.site_outputs = []
         for contact, site in zip(dynamics.contacts, self.sites):
@@ -528,12 +544,15 @@ def _compiled_sites(
 ) -> None:
     """Evaluate every clearance joint at the kinematics in ``workspace.data``; ``tau += J^T w`` (compiled path).
 
-    All laws compiled: one fused call (each law's outputs in its buffer). Otherwise site
-    by site, a law without a compiled kernel through its ``evaluate``.
+    Every law a shipped compiled law: one call of :func:`robot.rhs_kernels.all_sites`
+    (each law's outputs in its buffer). Otherwise site by site, a law without a
+    compiled kernel through its ``evaluate``.
     """
     placements, jacobian = compiled.placements, compiled.jacobian
     if compiled.fused is not None:
-        code = compiled.fused(placements, jacobian, v, onset_rates, tau, *compiled.fused_arguments)
+        code = compiled.fused(
+            placements, jacobian, v, onset_rates, tau, compiled.site_table, compiled.site_masks, compiled.site_parameters, compiled.site_outputs_buffer, compiled.site_twists
+        )
         if code != 0:
             index = code // 16 - 1
             _raise_contact_error(dynamics, workspace, index, compiled.sites[index][6], onset_rates[compiled.sites[index][5]], t, code % 16)

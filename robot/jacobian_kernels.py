@@ -5,11 +5,10 @@ respect to both element frames' poses and twists, by central differences of its
 compiled law kernel (:func:`site_derivative`), chained to generalized
 coordinates through the frames' LWA Jacobians (:func:`add_site_stiffness`).
 
-numba caches a compiled function on disk only if no argument is itself a
-compiled function (a kernel passed as an argument was compiled again in every
-process, ~3 s), so the law is chosen by an integer id among the shipped laws
-(:data:`LAW_IDS`); :func:`robot.state_jacobian.for_workspace` leaves any other
-law to the solver's own finite differences.
+The law is chosen by its integer id among the shipped laws
+(:data:`robot.rhs_kernels.LAW_IDS`, so that these functions are cached on disk);
+:func:`robot.state_jacobian.for_workspace` leaves any other law to the solver's
+own finite differences.
 """
 
 from __future__ import annotations
@@ -17,10 +16,7 @@ from __future__ import annotations
 import numpy as np
 
 from clearance_contact.compiled import jit
-from clearance_contact.revolute import revolute_kernel
-from clearance_contact.spherical import spherical_kernel
-
-from .rhs_kernels import _add_point_jacobian, site_twists
+from .rhs_kernels import _add_point_jacobian, law_kernel, site_twists
 
 #: forward-difference steps of the contact-wrench derivatives (pose: m, rad; twist: m/s, rad/s),
 #: small against the penetrations (~1e-6..1e-5 m) and slip velocities the laws resolve
@@ -112,14 +108,6 @@ def add_site_stiffness(placements, J, masks, frame_outer, frame_inner, derivativ
 
 
 @jit
-def _law(law_id, parameters, outer_rotation, outer_position, outer_twist, inner_rotation, inner_position, inner_twist, onset, out):
-    """The kernel of law ``law_id`` (:data:`LAW_IDS`)."""
-    if law_id == SPHERICAL_LAW:
-        return spherical_kernel(parameters, outer_rotation, outer_position, outer_twist, inner_rotation, inner_position, inner_twist, onset, out)
-    return revolute_kernel(parameters, outer_rotation, outer_position, outer_twist, inner_rotation, inner_position, inner_twist, onset, out)
-
-
-@jit
 def site_stiffness(law_id, parameters, placements, J, masks, frame_outer, frame_inner, v, onset, twists, out, wrench_outer, wrench_inner, derivative, G, perturbed, dtau_dpose, dtau_dtwist):
     """Add one clearance joint's ``dtau_c/dxi`` and ``dtau_c/dv`` (zero out of contact); returns the law's status.
 
@@ -133,7 +121,7 @@ def site_stiffness(law_id, parameters, placements, J, masks, frame_outer, frame_
     outer_rotation = placements[frame_outer, 0:9].reshape((3, 3)).T
     inner_rotation = placements[frame_inner, 0:9].reshape((3, 3)).T
     outer_position, inner_position = placements[frame_outer, 9:12], placements[frame_inner, 9:12]
-    status = _law(law_id, parameters, outer_rotation, outer_position, twists[0], inner_rotation, inner_position, twists[1], onset, out)
+    status = law_kernel(law_id, parameters, outer_rotation, outer_position, twists[0], inner_rotation, inner_position, twists[1], onset, out)
     if status != 0 or wrench_is_zero(out, wrench_outer, wrench_inner):
         return status
     status = site_derivative(law_id, parameters, outer_rotation, outer_position, twists[0], inner_rotation, inner_position, twists[1], onset, out, wrench_outer, wrench_inner, derivative, perturbed)
@@ -171,7 +159,7 @@ def site_derivative(law_id, parameters, outer_rotation, outer_position, outer_tw
         step = _input_step(k)
         _perturb(outer_rotation, outer_position, outer_twist, k, step if side == 0 else 0.0, rotations[0], positions[0], twists[0])
         _perturb(inner_rotation, inner_position, inner_twist, k, step if side == 1 else 0.0, rotations[1], positions[1], twists[1])
-        status = _law(law_id, parameters, rotations[0], positions[0], twists[0], rotations[1], positions[1], twists[1], onset, scratch)
+        status = law_kernel(law_id, parameters, rotations[0], positions[0], twists[0], rotations[1], positions[1], twists[1], onset, scratch)
         if status != 0:
             return status
         for r in range(6):
@@ -179,7 +167,3 @@ def site_derivative(law_id, parameters, outer_rotation, outer_position, outer_tw
             derivative[6 + r, column] = (scratch[wrench_inner + r] - base[wrench_inner + r]) / step
     return 0
 
-
-#: the shipped laws' kernels and the ids the compiled code knows them by
-SPHERICAL_LAW, REVOLUTE_LAW = 0, 1
-LAW_IDS = {spherical_kernel: SPHERICAL_LAW, revolute_kernel: REVOLUTE_LAW}

@@ -36,7 +36,9 @@ import ctypes
 import numpy as np
 import pinocchio as pin
 
-from clearance_contact.compiled import JIT_ENABLED, jit
+from clearance_contact.compiled import jit
+from clearance_contact.revolute import revolute_kernel
+from clearance_contact.spherical import spherical_kernel
 
 SE3_FLOATS = 12  # 3x3 rotation (column-major) + translation
 
@@ -238,52 +240,58 @@ def power_series(coefficients, x, out):
         out[j] = value
 
 
-_FUSED_SITES: dict = {}
+#: the shipped laws' kernels and the ids the compiled code knows them by. numba caches a compiled
+#: function on disk only if no argument is itself a compiled function, and a kernel passed as an
+#: argument costs ~7 us of dispatch a call: so the law is chosen by an integer inside compiled code
+SPHERICAL_LAW, REVOLUTE_LAW = 0, 1
+LAW_IDS = {spherical_kernel: SPHERICAL_LAW, revolute_kernel: REVOLUTE_LAW}
 
 
-def fused_sites(law_kernels: tuple):
-    """One compiled function that evaluates every clearance joint of a mechanism and adds ``J^T w`` to ``tau``.
+@jit
+def law_kernel(law_id, parameters, outer_rotation, outer_position, outer_twist, inner_rotation, inner_position, inner_twist, onset, out):
+    """The kernel of law ``law_id`` (:data:`LAW_IDS`); returns its status."""
+    if law_id == SPHERICAL_LAW:
+        return spherical_kernel(parameters, outer_rotation, outer_position, outer_twist, inner_rotation, inner_position, inner_twist, onset, out)
+    return revolute_kernel(parameters, outer_rotation, outer_position, outer_twist, inner_rotation, inner_position, inner_twist, onset, out)
 
-    ``law_kernels``: the sites' compiled law kernels, in order. numba cannot take
-    a compiled function as an argument cheaply (a dispatcher argument costs ~7 us
-    a call), so the function is generated for this tuple of kernels (bound as
-    globals) and compiled on first use (~1 s, once per process and tuple).
-    Signature: ``(placements, J, v, onset_rates, tau, *site_arguments)`` with,
-    per site, ``parameters, masks, frame_outer, frame_inner, first, last,
-    twists, out, wrench_outer, wrench_inner``; returns 0, or ``16 * (index + 1)
-    + status`` for the first site whose law returned a nonzero status (``tau``
-    then holds the sites before it).
+
+#: columns of the site table of :func:`all_sites` (one row per clearance joint)
+(
+    SITE_LAW, SITE_OUTER, SITE_INNER, SITE_FIRST, SITE_LAST, SITE_PARAMETERS, SITE_PARAMETERS_END,
+    SITE_OUT, SITE_OUT_END, SITE_WRENCH_OUTER, SITE_WRENCH_INNER,
+) = range(11)  # fmt: skip
+SITE_COLUMNS = 11
+
+
+@jit
+def all_sites(placements, J, v, onset_rates, tau, table, masks, parameters, outputs, twists):
+    """Evaluate every clearance joint of a mechanism and add ``J^T w`` to ``tau`` (one compiled call).
+
+    ``table`` (n_sites x :data:`SITE_COLUMNS`, int64): per joint its law id,
+    element frames, candidate range, the ranges of its kernel parameters in
+    ``parameters`` and of its law output in ``outputs`` (flat float arrays of all
+    joints), and its wrenches' offsets in that output; ``masks`` (n_sites, 2, nv)
+    the frames' supports; ``twists`` (n_sites, 2, 6) receives their twists.
+    Returns 0, or ``16 * (index + 1) + status`` for the first joint whose law
+    returned a nonzero status (``tau`` then holds the joints before it).
     """
-    function = _FUSED_SITES.get(law_kernels)
-    if function is not None:
-        return function
-    names = ["placements", "J", "v", "onset_rates", "tau"]
-    body = []
-    for i in range(len(law_kernels)):
-        site = [f"{name}_{i}" for name in ("parameters", "masks", "outer", "inner", "first", "last", "twists", "out", "w_outer", "w_inner")]
-        names += site
-        p, m, o, n, a, b, tw, out, wo, wi = site
-        body += [
-            f"    site_twists(placements, J, {m}, {o}, {n}, v, {tw})",
-            f"    status = kernel_{i}({p}, placements[{o}, 0:9].reshape((3, 3)).T, placements[{o}, 9:12], {tw}[0],"
-            f" placements[{n}, 0:9].reshape((3, 3)).T, placements[{n}, 9:12], {tw}[1], onset_rates[{a}:{b}], {out})",
-            "    if status != 0:",
-            f"        return 16 * {i + 1} + status",
-            f"    add_site_wrenches(placements, J, {m}, {o}, {n}, {out}, {wo}, {wi}, tau)",
-        ]
-    source = f"def fused({', '.join(names)}):\n" + "\n".join(body + ["    return 0"]) + "\n"
-    namespace = {"site_twists": site_twists, "add_site_wrenches": add_site_wrenches}
-    namespace.update({f"kernel_{i}": kernel for i, kernel in enumerate(law_kernels)})
-    exec(compile(source, f"<robot.rhs_kernels.fused_sites {len(law_kernels)}>", "exec"), namespace)
-    function = _jit_uncached(namespace["fused"])
-    _FUSED_SITES[law_kernels] = function
-    return function
-
-
-def _jit_uncached(function):
-    """``numba.njit`` without the disk cache (generated code has no file to cache against), or the function itself."""
-    if not JIT_ENABLED:
-        return function
-    import numba
-
-    return numba.njit(cache=False)(function)
+    for i in range(table.shape[0]):
+        outer, inner = table[i, SITE_OUTER], table[i, SITE_INNER]
+        out = outputs[table[i, SITE_OUT] : table[i, SITE_OUT_END]]
+        site_twists(placements, J, masks[i], outer, inner, v, twists[i])
+        status = law_kernel(
+            table[i, SITE_LAW],
+            parameters[table[i, SITE_PARAMETERS] : table[i, SITE_PARAMETERS_END]],
+            placements[outer, 0:9].reshape((3, 3)).T,
+            placements[outer, 9:12],
+            twists[i, 0],
+            placements[inner, 0:9].reshape((3, 3)).T,
+            placements[inner, 9:12],
+            twists[i, 1],
+            onset_rates[table[i, SITE_FIRST] : table[i, SITE_LAST]],
+            out,
+        )
+        if status != 0:
+            return 16 * (i + 1) + status
+        add_site_wrenches(placements, J, masks[i], outer, inner, out, table[i, SITE_WRENCH_OUTER], table[i, SITE_WRENCH_INNER], tau)
+    return 0

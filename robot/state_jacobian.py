@@ -60,6 +60,7 @@ from clearance_contact import ContactError
 
 from . import dynamics as D
 from . import jacobian_kernels as JK
+from . import rhs_kernels as K
 
 #: ``SolverOptions.jacobian`` values
 STRUCTURED, FINITE_DIFFERENCE = "structured", "finite-difference"
@@ -77,7 +78,7 @@ class StateJacobian:
 
     def __init__(self, dynamics: D.DynamicsModel, workspace: D.DynamicsWorkspace):
         compiled = workspace.compiled
-        if compiled is None or not compiled.laws_compiled or any(site[0] not in JK.LAW_IDS for site in compiled.sites):
+        if not _applies(compiled):
             raise ValueError("the structured Jacobian needs the compiled right-hand side and clearance_contact's compiled laws")
         self.dynamics, self.workspace, self.compiled = dynamics, workspace, compiled
         model = dynamics.mechanism.model
@@ -86,7 +87,7 @@ class StateJacobian:
         self.dtau_dtwist = np.zeros((nv, nv))
         largest = max((site[7].shape[0] for site in compiled.sites), default=0)
         self.scratch = (np.zeros((12, 24)), np.zeros((12, nv)), (np.zeros((2, 3, 3)), np.zeros((2, 3)), np.zeros((2, 6)), np.zeros(largest)))
-        self.law_ids = [JK.LAW_IDS[site[0]] for site in compiled.sites]
+        self.law_ids = [K.LAW_IDS[site[0]] for site in compiled.sites]
         self.calls = 0
 
     def contact_stiffness(self, t: float, v: np.ndarray, onset_rates: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -152,10 +153,14 @@ class StateJacobian:
 
 def for_workspace(dynamics: D.DynamicsModel, workspace: D.DynamicsWorkspace) -> StateJacobian | None:
     """The structured Jacobian on ``workspace``, or None where it does not apply (Python right-hand side)."""
-    compiled = workspace.compiled
-    if compiled is None or not compiled.laws_compiled or any(site[0] not in JK.LAW_IDS for site in compiled.sites):
+    if not _applies(workspace.compiled):
         return None
     return StateJacobian(dynamics, workspace)
+
+
+def _applies(compiled: D.CompiledTerms | None) -> bool:
+    """The compiled right-hand side, every law a shipped compiled law (``robot.rhs_kernels.LAW_IDS``)."""
+    return compiled is not None and all(site[0] in K.LAW_IDS for site in compiled.sites)
 
 
 def finite_difference_jacobian(fun, t: float, y: np.ndarray, relative_step: float = 1e-7) -> np.ndarray:
