@@ -16,6 +16,7 @@ import numpy as np
 import pinocchio as pin
 import pytest
 
+from clearance_contact import ContactError
 from robot import dynamics as D
 from robot import state_jacobian as SJ
 from robot.errors import SceneError
@@ -125,3 +126,18 @@ def test_an_unknown_choice_is_refused_by_name(tmp_path):
         load_scene(str(scene))
     scene.write_text('extends = "compound_misaligned"\n[solver]\nmethod = "CVODE_BDF"\njacobian = "finite-difference"\n')
     assert load_scene(str(scene)).solver.jacobian == SJ.FINITE_DIFFERENCE
+
+
+def test_a_refused_perturbation_falls_back_to_differences(misaligned, monkeypatch):
+    """A contact law refusing a perturbed input: that Jacobian is differenced instead, the run goes on."""
+    refusals = []
+
+    def refuse(self, t, v, onset_rates):
+        refusals.append(t)
+        raise ContactError("refused for the test")
+
+    monkeypatch.setattr(SJ.StateJacobian, "contact_stiffness", refuse)
+    options = SolverOptions("CVODE_BDF", rtol=1e-6, atol=1e-8, max_step=1e-3)
+    trajectory = integrate(misaligned.dynamics, misaligned.y0, (0.0, 0.01), options, misaligned.scene.limits)
+    assert trajectory.success, trajectory.message
+    assert len(refusals) == trajectory.n_jacobians > 0
