@@ -1,7 +1,7 @@
 """Compiled kernels of the state Jacobian's contact terms (:mod:`robot.state_jacobian`).
 
 For a clearance joint in contact: the derivative of its two wrenches with
-respect to both element frames' poses and twists, by central differences of its
+respect to both element frames' poses and twists, by forward differences of its
 compiled law kernel (:func:`site_derivative`), chained to generalized
 coordinates through the frames' LWA Jacobians (:func:`add_site_stiffness`).
 
@@ -16,7 +16,7 @@ from __future__ import annotations
 import numpy as np
 
 from clearance_contact.compiled import jit
-from .rhs_kernels import _add_point_jacobian, law_kernel, site_twists
+from .rhs_kernels import add_point_jacobian, law_kernel, site_twists
 
 #: forward-difference steps of the contact-wrench derivatives (pose: m, rad; twist: m/s, rad/s),
 #: small against the penetrations (~1e-6..1e-5 m) and slip velocities the laws resolve
@@ -29,7 +29,7 @@ def frame_jacobian(placements, J, mask_row, frame, G, row):
     for k in range(6):
         for c in range(J.shape[1]):
             G[row + k, c] = 0.0
-    _add_point_jacobian(J, mask_row, placements[frame, 9], placements[frame, 10], placements[frame, 11], 1.0, G, row)
+    add_point_jacobian(J, mask_row, placements[frame, 9], placements[frame, 10], placements[frame, 11], 1.0, G, row)
     for c in range(J.shape[1]):
         if mask_row[c]:
             G[row + 3, c] = J[3, c]

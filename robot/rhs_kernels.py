@@ -105,7 +105,7 @@ def point_velocity(placements, J, mask_row, frame, v, out):
 
 
 @jit
-def _add_point_jacobian(J, mask_row, px, py, pz, sign, phi_q, row):
+def add_point_jacobian(J, mask_row, px, py, pz, sign, phi_q, row):
     for c in range(J.shape[1]):
         if mask_row[c]:
             wx, wy, wz = J[3, c], J[4, c], J[5, c]
@@ -148,8 +148,8 @@ def spherical_closure_drift(
         for k in range(3):
             for c in range(nv):
                 phi_q[row + k, c] = 0.0
-        _add_point_jacobian(J, masks[2 * i], placements[fa, 9], placements[fa, 10], placements[fa, 11], 1.0, phi_q, row)
-        _add_point_jacobian(J, masks[2 * i + 1], placements[fb, 9], placements[fb, 10], placements[fb, 11], -1.0, phi_q, row)
+        add_point_jacobian(J, masks[2 * i], placements[fa, 9], placements[fa, 10], placements[fa, 11], 1.0, phi_q, row)
+        add_point_jacobian(J, masks[2 * i + 1], placements[fb, 9], placements[fb, 10], placements[fb, 11], -1.0, phi_q, row)
         aax, aay, aaz = _point_bias_acceleration(placements, J, dJ, masks[2 * i], fa, v)
         abx, aby, abz = _point_bias_acceleration(placements, J, dJ, masks[2 * i + 1], fb, v)
         for k in range(3):

@@ -25,7 +25,7 @@ Linearised at fixed ``Phi_q``, ``M`` and ``P``, ``X`` (tangent displacement ``xi
 * ``d(M qdd + h)/d(xi, v)``: Pinocchio's ``computeRNEADerivatives`` at ``qdd``
   (analytic; gravity, Coriolis and the ``dM/dq qdd`` term);
 * ``d tau_c/d(xi, v) = G^T (dw/d(pose, twist)) G``: the contact wrenches' own
-  derivatives by central differences of the compiled law kernels (24 inputs
+  derivatives by forward differences of the compiled law kernels (24 inputs
   per joint in contact, ~0.5 us each), chained through the frames' LWA
   Jacobians ``G`` (:func:`robot.jacobian_kernels.add_site_stiffness`);
 * raw configuration columns: ``df/dq = (df/dxi) T^+`` with ``T = dq/dxi``

@@ -2,7 +2,7 @@
 
     python scripts/work_precision.py [--scene NAME] [--t-end T] [--out DIR]
         [--quick] [--skip-stability] [--skip-sweep] [--realtime-t-end T] [--realtime-repeats N] [--methods M1,M2]
-        [--tolerances R1,R2] [--steps H1,H2] [--max-step H] [--candidates M:RTOL,...] [--long-horizon]
+        [--tolerances R1,R2] [--steps H1,H2] [--max-step H] [--candidates M:RTOL[:JACOBIAN],...] [--long-horizon]
 
 Writes to DIR (default results/work_precision/SCENE):
 
