@@ -187,7 +187,7 @@ def make_result(scene_name: str, dynamics: D.DynamicsModel, trajectory: Trajecto
         arrays["event_t"] = np.array([e[0] for e in trajectory.events])
         arrays["event_candidate"] = np.array([e[1] for e in trajectory.events], dtype=int)
         arrays["event_is_onset"] = np.array([e[2] == "onset" for e in trajectory.events])
-        arrays["event_kind"] = np.array([_EVENT_KINDS.get(e[2], -1) for e in trajectory.events], dtype=np.int8)
+        arrays["event_kind"] = np.array([_EVENT_KINDS[e[2]] for e in trajectory.events], dtype=np.int8)
         arrays["event_value"] = np.array([e[3] for e in trajectory.events])
     return SimulationResult(scene_name, trajectory.status, trajectory.message, trajectory.cause, trajectory.t_end, counts, arrays, metadata)
 

@@ -46,7 +46,7 @@ def _random_states(run, rng, n):
     dynamics = run.dynamics
     model = dynamics.mechanism.model
     nq, nv = dynamics.nq, dynamics.nv
-    base = run.y0 if run.y0.shape[0] == nq + nv + 2 else np.concatenate([run.y0, [0.0, 0.0]])
+    base = np.concatenate([run.y0, [0.0, 0.0]])  # work accumulators start at zero
     for _ in range(n):
         y = base.copy()
         y[:nq] = pin.integrate(model, y[:nq], 10 ** rng.uniform(-7, -3.5) * rng.standard_normal(nv))

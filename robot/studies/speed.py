@@ -70,7 +70,7 @@ def reference_state_derivative(dynamics: D.DynamicsModel, data: pin.Data, t: flo
 def sample_states(run: Run, t_end: float = 0.02) -> dict:
     """{name: (t, y, onset)}: the initial state, and states of a short run with contacts."""
     dynamics = run.dynamics
-    y0 = run.y0 if run.y0.shape[0] == dynamics.nq + dynamics.nv + 2 else np.concatenate([run.y0, [0.0, 0.0]])
+    y0 = np.concatenate([run.y0, [0.0, 0.0]])  # work accumulators start at zero
     states = {"initial": (0.0, y0, initial_onset_rates(dynamics))}
     if not dynamics.contacts:
         return states

@@ -31,7 +31,7 @@ from __future__ import annotations
 
 import math
 import textwrap
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -84,20 +84,14 @@ def comparable_window(a: Outcome, b: Outcome, tolerance: float) -> float:
 
 def reference(run: Run, t_end: float, output_step: float, window_tolerance: float = 1e-8) -> Reference:
     options = dict(output_step=output_step)
-    ref = simulate(run, _with(REFERENCE, **options), t_end, label="reference DOP853 rtol 1e-11")
-    check = simulate(run, _with(CHECK, **options), t_end, label="check DOP853 rtol 1e-10")
+    ref = simulate(run, replace(REFERENCE, **options), t_end, label="reference DOP853 rtol 1e-11")
+    check = simulate(run, replace(CHECK, **options), t_end, label="check DOP853 rtol 1e-10")
     if not (ref.success and check.success):
         raise RuntimeError(f"reference runs failed: {ref.message}; {check.message}")
     window = comparable_window(ref, check, window_tolerance)
     reference = Reference(ref, check, window, window_tolerance)
     reference.agreement = errors(check, reference)
     return reference
-
-
-def _with(options: SolverOptions, **changes) -> SolverOptions:
-    values = {name: getattr(options, name) for name in SolverOptions.__dataclass_fields__}
-    values.update(changes)
-    return SolverOptions(**values)
 
 
 def _relative(value: float, ref: float) -> float:
@@ -153,7 +147,7 @@ def sweep_cases(methods=None, tolerances=TOLERANCES, step_sizes=None, max_step: 
 def run_sweep(run: Run, ref: Reference, cases, t_end: float, output_step: float, progress=None) -> list[dict]:
     rows = []
     for label, options in cases:
-        outcome = simulate(run, _with(options, output_step=output_step), t_end, label=label)
+        outcome = simulate(run, replace(options, output_step=output_step), t_end, label=label)
         row = outcome.counts()
         row["errors"] = errors(outcome, ref)
         rows.append(row)

@@ -120,18 +120,6 @@ def _cross(a, b) -> np.ndarray:
     return np.array([a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]])
 
 
-def _ep_matrix(ep: np.ndarray) -> np.ndarray:
-    """Rotation of (not necessarily unit) Euler parameters, Exudyn's formula."""
-    e0, e1, e2, e3 = ep
-    return np.array(
-        [
-            [1 - 2 * (e2 * e2 + e3 * e3), 2 * (e1 * e2 - e0 * e3), 2 * (e1 * e3 + e0 * e2)],
-            [2 * (e1 * e2 + e0 * e3), 1 - 2 * (e1 * e1 + e3 * e3), 2 * (e2 * e3 - e0 * e1)],
-            [2 * (e1 * e3 - e0 * e2), 2 * (e2 * e3 + e0 * e1), 1 - 2 * (e1 * e1 + e2 * e2)],
-        ]
-    )
-
-
 def _ep_G(ep: np.ndarray) -> np.ndarray:
     """omega (world) = G ep_dot."""
     e0, e1, e2, e3 = ep
@@ -243,7 +231,7 @@ class _ContactElement:
             x = q[7 * k : 7 * k + 7] + self.reference[7 * k : 7 * k + 7]
             xd = q_t[7 * k : 7 * k + 7]
             ep = x[3:]
-            A = _ep_matrix(ep)
+            A = NE.quaternion_to_matrix(ep[None, :])[0]  # Exudyn's formula, valid for non-unit parameters too
             G = _ep_G(ep)
             omega = G @ xd[3:]
             lever = A @ frame.offset
