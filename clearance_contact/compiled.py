@@ -22,12 +22,15 @@ joints' ``evaluate`` / ``penetration`` turn a nonzero status into
 
 from __future__ import annotations
 
+import hashlib
 import math
 import os
+from pathlib import Path
 
 __all__ = [
     "jit",
     "JIT_ENABLED",
+    "drop_stale_caches",
     "STATUS_OK",
     "STATUS_NONFINITE_INPUT",
     "STATUS_NONFINITE_PENETRATION",
@@ -68,6 +71,38 @@ JIT_ENABLED: bool = False
 jit = _identity
 """``numba.njit(cache=True)`` when :data:`JIT_ENABLED`, else the identity decorator."""
 
+
+def drop_stale_caches(sources, cache_directory) -> bool:
+    """Delete numba's cache files in ``cache_directory`` if any file of ``sources`` changed.
+
+    numba keys a cached function on its own source file only: a compiled function
+    that calls a law kernel defined in another file keeps its old machine code
+    when that file changes. So a package whose compiled code spans files keeps a
+    digest of all of them (``numba_sources.sha256`` in the cache folder) and drops
+    every ``*.nbi``/``*.nbc`` there when it differs; they are compiled again on
+    first use. Returns True if it dropped them. A folder it cannot write is left
+    alone (numba then caches elsewhere or not at all).
+    """
+    digest = hashlib.sha256()
+    for source in sorted(Path(p) for p in sources):
+        digest.update(source.name.encode())
+        digest.update(source.read_bytes())
+    folder = Path(cache_directory)
+    stamp = folder / "numba_sources.sha256"
+    try:
+        if stamp.is_file() and stamp.read_text() == digest.hexdigest():
+            return False
+        folder.mkdir(parents=True, exist_ok=True)
+        for cached in list(folder.glob("*.nbi")) + list(folder.glob("*.nbc")):
+            cached.unlink(missing_ok=True)
+        partial = folder / f"numba_sources.sha256.{os.getpid()}"
+        partial.write_text(digest.hexdigest())
+        os.replace(partial, stamp)
+    except OSError:
+        return False
+    return True
+
+
 if os.environ.get("CLEARANCE_CONTACT_JIT", "1") != "0":
     try:
         import numba as _numba
@@ -76,6 +111,8 @@ if os.environ.get("CLEARANCE_CONTACT_JIT", "1") != "0":
     if _numba is not None:
         jit = _numba.njit(cache=True)
         JIT_ENABLED = True
+        _PACKAGE = Path(__file__).resolve().parent
+        drop_stale_caches(_PACKAGE.glob("*.py"), _PACKAGE / "__pycache__")
 
 
 class KernelAttribute:

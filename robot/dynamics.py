@@ -163,6 +163,21 @@ def make_workspace(dynamics: DynamicsModel) -> DynamicsWorkspace:
     )
 
 
+class CompiledSite(NamedTuple):
+    """One clearance joint on the compiled path (views into :class:`CompiledTerms`' packed arrays)."""
+
+    law_kernel: Callable | None  # the law's compiled kernel, None for a law evaluated through its API
+    parameters: np.ndarray | None  # the kernel's parameters
+    masks: np.ndarray  # (2, nv) supports of the outer and inner element frames
+    outer_frame: int
+    inner_frame: int
+    candidates: slice  # its contact candidates in the global list
+    twists: np.ndarray  # (2, 6) LWA twists of the two frames (written by the kernels)
+    outputs: np.ndarray | None  # the law's output buffer
+    wrench_outer: int  # offsets of the wrenches in ``outputs`` (a Python law: in [outer, inner])
+    wrench_inner: int
+
+
 class CompiledTerms:
     """Views and index arrays of the compiled right-hand side (:mod:`robot.rhs_kernels`) on one ``pin.Data``.
 
@@ -191,9 +206,8 @@ class CompiledTerms:
         self.actuator_v = np.asarray(dynamics.mechanism.actuator_v_index, dtype=np.int64)
         if not kernel.driven:
             self.actuator_q = self.actuator_v = np.zeros(0, dtype=np.int64)
-        # per contact site: (compiled law kernel or None, its parameters, support masks, outer
-        # frame, inner frame, candidate slice, twist buffer, law output buffer, wrench offsets);
-        # the masks, twists and output buffers are views of the arrays of all_sites below
+        # per contact site a CompiledSite; its masks, twists and output buffer are views of the
+        # packed arrays that all_sites reads
         laws = [contact.law for contact in dynamics.contacts]
         # a law's kernel is None when it cannot do everything compiled (e.g. a user-defined friction law)
         compiled_law = [getattr(law, "kernel", None) is not None and hasattr(law, "kernel_parameters") for law in laws]
@@ -207,7 +221,7 @@ class CompiledTerms:
             law, site = contact.law, contact.site
             self.site_masks[index] = K.support_mask(model, [site.outer_frame, site.inner_frame])
             self.sites.append(
-                (
+                CompiledSite(
                     law.kernel if ok else None,
                     np.asarray(law.kernel_parameters, dtype=float) if ok else None,
                     self.site_masks[index],
@@ -224,9 +238,9 @@ class CompiledTerms:
         self.laws_compiled = all(compiled_law)
         # every site in one compiled call (rhs_kernels.all_sites) when every law is a shipped compiled law
         self.fused = None
-        if self.sites and self.laws_compiled and all(site[0] in K.LAW_IDS for site in self.sites):
+        if self.sites and self.laws_compiled and all(site.law_kernel in K.LAW_IDS for site in self.sites):
             self.fused = K.all_sites
-            self.site_parameters = np.concatenate([site[1] for site in self.sites])
+            self.site_parameters = np.concatenate([site.parameters for site in self.sites])
             table = np.zeros((len(self.sites), K.SITE_COLUMNS), dtype=np.int64)
             first_parameter = first_output = 0
             for row, (kernel, parameters, _, outer, inner, candidates, _, buffer, w_outer, w_inner) in zip(table, self.sites):
@@ -241,7 +255,7 @@ class CompiledTerms:
         # per site: candidate slice and views of its law's penetration, rate and normal force outputs
         self.site_outputs = []
         for contact, site in zip(dynamics.contacts, self.sites):
-            law, buffer, k = contact.law, site[7], contact.law.n_candidates
+            law, buffer, k = contact.law, site.outputs, contact.law.n_candidates
             if buffer is not None:
                 self.site_outputs.append(
                     (
@@ -558,7 +572,8 @@ def _compiled_sites(
         )
         if code != 0:
             index = code // 16 - 1
-            _raise_contact_error(dynamics, workspace, index, compiled.sites[index][6], onset_rates[compiled.sites[index][5]], t, code % 16)
+            site = compiled.sites[index]
+            _raise_contact_error(dynamics, workspace, index, site.twists, onset_rates[site.candidates], t, code % 16)
         return
     for index, (law_kernel, parameters, masks, outer, inner, candidates, twists, buffer, w_outer, w_inner) in enumerate(compiled.sites):
         onset = onset_rates[candidates]

@@ -65,7 +65,7 @@ def _perturb(rotation, position, twist, k, step, rotation_out, position_out, twi
 
 @jit
 def _input_step(k):
-    """Central-difference step of frame input k (see :func:`_perturb`)."""
+    """Forward-difference step of frame input k (see :func:`_perturb`)."""
     if k < 3:
         return POSITION_STEP
     if k < 6:

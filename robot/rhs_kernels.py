@@ -32,13 +32,19 @@ checks all of it against the reference functions of ``robot.constraints``
 from __future__ import annotations
 
 import ctypes
+from pathlib import Path
 
 import numpy as np
 import pinocchio as pin
 
-from clearance_contact.compiled import jit
+from clearance_contact.compiled import JIT_ENABLED, drop_stale_caches, jit
 from clearance_contact.revolute import revolute_kernel
 from clearance_contact.spherical import spherical_kernel
+
+if JIT_ENABLED:
+    # this package's compiled code calls clearance_contact's law kernels (see drop_stale_caches)
+    _ROBOT = Path(__file__).resolve().parent
+    drop_stale_caches([*_ROBOT.glob("*.py"), *(_ROBOT.parent / "clearance_contact").glob("*.py")], _ROBOT / "__pycache__")
 
 SE3_FLOATS = 12  # 3x3 rotation (column-major) + translation
 
@@ -247,12 +253,18 @@ SPHERICAL_LAW, REVOLUTE_LAW = 0, 1
 LAW_IDS = {spherical_kernel: SPHERICAL_LAW, revolute_kernel: REVOLUTE_LAW}
 
 
+#: status of :func:`law_kernel` for a law id it does not know (nothing written)
+STATUS_UNKNOWN_LAW = 15
+
+
 @jit
 def law_kernel(law_id, parameters, outer_rotation, outer_position, outer_twist, inner_rotation, inner_position, inner_twist, onset, out):
-    """The kernel of law ``law_id`` (:data:`LAW_IDS`); returns its status."""
+    """The kernel of law ``law_id`` (:data:`LAW_IDS`); returns its status (:data:`STATUS_UNKNOWN_LAW` for another id)."""
     if law_id == SPHERICAL_LAW:
         return spherical_kernel(parameters, outer_rotation, outer_position, outer_twist, inner_rotation, inner_position, inner_twist, onset, out)
-    return revolute_kernel(parameters, outer_rotation, outer_position, outer_twist, inner_rotation, inner_position, inner_twist, onset, out)
+    if law_id == REVOLUTE_LAW:
+        return revolute_kernel(parameters, outer_rotation, outer_position, outer_twist, inner_rotation, inner_position, inner_twist, onset, out)
+    return STATUS_UNKNOWN_LAW
 
 
 #: columns of the site table of :func:`all_sites` (one row per clearance joint)

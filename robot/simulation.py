@@ -153,7 +153,7 @@ class Trajectory:
     n_rhs: int = 0
     n_events: int = 0
     n_restarts: int = 0
-    n_jacobians: int = 0  # Newton-matrix Jacobians of implicit methods (structured or differenced)
+    n_jacobians: int = 0  # Jacobians of implicit methods, as each solver counts them (LSODA: its LU factorisations)
     cpu_time: float = 0.0
     wall_time: float = 0.0
     events: list = field(default_factory=list)  # (t, candidate, kind, value): "onset" (approach rate), "peak" (depth), "force_peak" (N)
@@ -170,6 +170,9 @@ class _Failure(Exception):
         super().__init__(message)
         self.cause = cause
 
+
+#: relative step of the finite-difference fallback of the structured Jacobian (sqrt of machine epsilon)
+FORWARD_STEP = math.sqrt(np.finfo(float).eps)
 
 RECORD_STEP, RECORD_ONSET, RECORD_PEAK, RECORD_START, RECORD_OUTPUT = 0, 1, 2, 3, 4
 #: the maximum of a candidate's normal force over an impact's compression phase (see _ForcePeaks)
@@ -243,9 +246,14 @@ def integrate(
         out = np.empty((nq + nv + 2, nq + nv + 2)) if out is None else out
         try:
             return state_jacobian(t, y, onset, out)
-        except ContactError:
-            # a contact law refused a perturbed input: difference the right-hand side instead
-            out[:] = SJ.finite_difference_jacobian(rhs, t, y)
+        except (ContactError, np.linalg.LinAlgError):
+            # a contact law refused a perturbed input, or a factorisation failed: difference the
+            # right-hand side instead, as the solver would (forward, sqrt(eps) steps)
+            base = rhs(t, y)
+            if _all_finite(base):
+                out[:] = SJ.finite_difference_jacobian(rhs, t, y, relative_step=FORWARD_STEP, base=base)
+            else:
+                out[:] = 0.0  # an absurd trial state: the step is rejected anyway on its inf derivative
             return out
 
     def probe(t: float, y: np.ndarray) -> D.Probe:
@@ -294,6 +302,7 @@ def integrate(
         dense_calls[0] += workspace.rhs_calls - before
         return dense
 
+    solver = None  # the current solver (its counts are added when it ends)
     try:
         while t < t_final:
             workspace.rhs_calls = 0
@@ -390,7 +399,7 @@ def integrate(
                 if progress is not None:
                     progress(t)
             n_rhs_total += workspace.rhs_calls
-            counts["jacobians"] += int(getattr(solver, "njev", 0) or 0)
+            counts["jacobians"] += _jacobians_of(solver)
             stages = STAGES.get(options.method)
             if stages is not None:
                 attempts = (workspace.rhs_calls - start_calls - dense_calls[0]) / stages
@@ -408,12 +417,15 @@ def integrate(
     except _Failure as failure:
         status, cause, message = FAILED, failure.cause, str(failure)
         n_rhs_total += workspace.rhs_calls
+        counts["jacobians"] += _jacobians_of(solver)
     except (np.linalg.LinAlgError, RuntimeError, ValueError) as exc:
         status, cause, message = FAILED, "solver error", f"t={t:.9g} s: {type(exc).__name__}: {exc}"
         n_rhs_total += workspace.rhs_calls
+        counts["jacobians"] += _jacobians_of(solver)
     except KeyboardInterrupt:
         status, cause, message = FAILED, "interrupted", f"t={t:.9g} s: interrupted by the user"
         n_rhs_total += workspace.rhs_calls
+        counts["jacobians"] += _jacobians_of(solver)
     return Trajectory(
         status=status,
         message=message,
@@ -435,6 +447,11 @@ def integrate(
         n_hidden_contacts=counts["hidden"],
         max_onset_overshoot=overshoot[0],
     )
+
+
+def _jacobians_of(solver) -> int:
+    """The Jacobian evaluations a solver counted (0 before any solver was made)."""
+    return int(getattr(solver, "njev", 0) or 0)
 
 
 def _penetration_bounds(dynamics: D.DynamicsModel, limits: FailureLimits) -> np.ndarray:

@@ -5,9 +5,11 @@ Newton iterations on ``y - gamma f(t, y) = r`` with the iteration matrix
 ``I - gamma df/dy``. Left to itself it builds ``df/dy`` by finite differences:
 one right-hand side per state coordinate (54 for the 4-UPS/RPS mechanism with
 two free bodies), which was 57 % of all right-hand sides of a CVODE_BDF run of
-``compound_misaligned``. The matrix only steers the iterations (the step's error
-control never sees it), so it may leave out what is not stiff; what is stiff
-here is the contact: ``K ~ 1e9 N/m`` on bodies of a few kilograms.
+``compound_misaligned``. The matrix only steers the iterations (the error
+control of BDF, LSODA and CVODE never sees it; Radau filters its error
+estimate through ``(I/h - J)``, a small effect), so it may leave out what is
+not stiff; what is stiff here is the contact: ``K ~ 1e9 N/m`` on bodies of a
+few kilograms.
 
 State ``y = [q, v, W_act, W_contact]``, ``f = [T(q) v, qdd, P_act, P_contact]``
 (:func:`robot.dynamics.state_derivative`). Pinocchio's KKT solution of paper
@@ -85,9 +87,9 @@ class StateJacobian:
         nv = model.nv
         self.dtau_dpose = np.zeros((nv, nv))
         self.dtau_dtwist = np.zeros((nv, nv))
-        largest = max((site[7].shape[0] for site in compiled.sites), default=0)
+        largest = max((site.outputs.shape[0] for site in compiled.sites), default=0)
         self.scratch = (np.zeros((12, 24)), np.zeros((12, nv)), (np.zeros((2, 3, 3)), np.zeros((2, 3)), np.zeros((2, 6)), np.zeros(largest)))
-        self.law_ids = [K.LAW_IDS[site[0]] for site in compiled.sites]
+        self.law_ids = [K.LAW_IDS[site.law_kernel] for site in compiled.sites]
         self.calls = 0
 
     def contact_stiffness(self, t: float, v: np.ndarray, onset_rates: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -111,7 +113,8 @@ class StateJacobian:
         model, data = dynamics.mechanism.model, workspace.data
         nq, nv = model.nq, model.nv
         self.calls += 1
-        # the right-hand side at (t, y) leaves M (upper triangle), Phi_q, the Jacobians and qdd
+        # the right-hand side at (t, y) leaves Phi_q, the frame Jacobians and qdd in the data (and M,
+        # which computeRNEADerivatives writes again, the same values, before it is factorised)
         qdd = D.state_derivative(dynamics, workspace, t, y, onset_rates)[nq : nq + nv]
         first = self.compiled.n_closure_rows
         driving_multipliers = data.lambda_c[first:].copy()
@@ -160,17 +163,21 @@ def for_workspace(dynamics: D.DynamicsModel, workspace: D.DynamicsWorkspace) -> 
 
 def _applies(compiled: D.CompiledTerms | None) -> bool:
     """The compiled right-hand side, every law a shipped compiled law (``robot.rhs_kernels.LAW_IDS``)."""
-    return compiled is not None and all(site[0] in K.LAW_IDS for site in compiled.sites)
+    return compiled is not None and all(site.law_kernel in K.LAW_IDS for site in compiled.sites)
 
 
-def finite_difference_jacobian(fun, t: float, y: np.ndarray, relative_step: float = 1e-7) -> np.ndarray:
-    """``df/dy`` by central differences of ``fun(t, y)``: the reference of the tests, and the fallback."""
+def finite_difference_jacobian(fun, t: float, y: np.ndarray, relative_step: float = 1e-7, base: np.ndarray | None = None) -> np.ndarray:
+    """``df/dy`` by central differences of ``fun(t, y)`` (the tests' reference), or by forward
+    differences from ``base = fun(t, y)`` when it is given (half the calls: the simulation's fallback)."""
     y = np.asarray(y, dtype=float)
     columns = []
     for j in range(y.shape[0]):
         step = relative_step * max(1.0, abs(y[j]))
         plus, minus = y.copy(), y.copy()
         plus[j] += step
+        if base is not None:
+            columns.append((np.asarray(fun(t, plus)) - base) / step)
+            continue
         minus[j] -= step
         columns.append((np.asarray(fun(t, plus)) - np.asarray(fun(t, minus))) / (2.0 * step))
     return np.column_stack(columns)

@@ -8,7 +8,8 @@
   applies the law, equal to the equivalent built-in law;
 * the whole contact test suite with ``CLEARANCE_CONTACT_JIT=0``, and the compiled
   outputs against that plain-Python run (subprocesses);
-* ``clearance_contact`` imports and works without numba.
+* ``clearance_contact`` imports and works without numba;
+* numba's caches are dropped when a source file of the package changes.
 """
 
 from __future__ import annotations
@@ -406,3 +407,26 @@ def test_norms_are_cpython_hypot(x: float, y: float, z: float) -> None:
         assert f2(x, y) == math.hypot(x, y)
     assert norm3(math.inf, 0.0, 1.0) == math.inf and math.isnan(norm3(math.nan, 0.0, 1.0))
     assert norm3(0.0, -0.0, 0.0) == 0.0
+
+
+def test_numba_caches_are_dropped_when_a_source_changes(tmp_path):
+    """A cached function calling a kernel of another file would keep stale code: the digest drops it."""
+    from clearance_contact.compiled import drop_stale_caches
+
+    sources = [tmp_path / "law.py", tmp_path / "caller.py"]
+    for source in sources:
+        source.write_text("x = 1\n")
+    cache = tmp_path / "__pycache__"
+    cache.mkdir()
+    cached = [cache / "caller.f-1.py311.nbi", cache / "caller.f-1.py311.1.nbc", cache / "caller.cpython-311.pyc"]
+    for path in cached:
+        path.write_bytes(b"compiled")
+    assert drop_stale_caches(sources, cache)  # no digest yet: numba's files go, Python's stay
+    assert [p.exists() for p in cached] == [False, False, True]
+    for path in cached[:2]:
+        path.write_bytes(b"compiled")
+    assert not drop_stale_caches(sources, cache)  # nothing changed
+    assert all(p.exists() for p in cached)
+    sources[0].write_text("x = 2\n")  # the callee's file changes
+    assert drop_stale_caches(sources, cache)
+    assert [p.exists() for p in cached] == [False, False, True]

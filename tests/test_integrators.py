@@ -125,7 +125,7 @@ def test_compiled_right_hand_side_covers_the_shipped_scenes():
         dynamics = build_run(name).dynamics
         workspace = D.make_workspace(dynamics)
         assert workspace.compiled is not None, name
-        assert all(site[0] is not None for site in workspace.compiled.sites), name  # laws compiled too
+        assert all(site.law_kernel is not None for site in workspace.compiled.sites), name  # laws compiled too
     crank = build_mechanism(DATA / "slider_crank.urdf")
     assert any(rows.closure.kind == "revolute" for rows in C.constraint_set(crank, driven=True).closures)
 
@@ -135,7 +135,7 @@ def test_compiled_path_with_a_python_law_equals_reference(misaligned, with_pytho
     dynamics = misaligned.dynamics
     wrapped = with_python_laws(dynamics)
     workspace = D.make_workspace(wrapped)
-    assert workspace.compiled is not None and all(site[0] is None for site in workspace.compiled.sites)
+    assert workspace.compiled is not None and all(site.law_kernel is None for site in workspace.compiled.sites)
     compiled_workspace = D.make_workspace(dynamics)
     data = dynamics.mechanism.model.createData()
     rng = np.random.default_rng(13)

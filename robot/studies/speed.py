@@ -68,7 +68,13 @@ def reference_state_derivative(dynamics: D.DynamicsModel, data: pin.Data, t: flo
 
 
 def sample_states(run: Run, t_end: float = 0.02) -> dict:
-    """{name: (t, y, onset)}: the initial state, and states of a short run with contacts."""
+    """{name: (t, y, onset)}: the initial state, and states of a short run with contacts.
+
+    Per category ("no contact", "some joints in contact", "all joints in contact")
+    the state of the run with the deepest total penetration (the first one for
+    "no contact"): a state at an onset touches by ~1e-18 m and has no contact
+    force to speak of.
+    """
     dynamics = run.dynamics
     y0 = np.concatenate([run.y0, [0.0, 0.0]])  # work accumulators start at zero
     states = {"initial": (0.0, y0, initial_onset_rates(dynamics))}
@@ -84,9 +90,10 @@ def sample_states(run: Run, t_end: float = 0.02) -> dict:
         pen = D.contact_probe(dynamics, workspace, float(t), q, y[dynamics.nq : dynamics.nq + dynamics.nv], onset).penetration
         touching = tuple(bool(np.any(pen[c.candidates] > 0)) for c in dynamics.contacts)
         key = "all joints in contact" if all(touching) else ("some joints in contact" if any(touching) else "no contact")
-        if key not in best:
-            best[key] = (float(t), np.array(y), np.array(onset))
-    states.update(best)
+        depth = float(np.sum(np.maximum(pen, 0.0)))
+        if key not in best or depth > best[key][0]:
+            best[key] = (depth, (float(t), np.array(y), np.array(onset)))
+    states.update({key: state for key, (_, state) in best.items()})
     return states
 
 
