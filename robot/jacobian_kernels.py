@@ -16,7 +16,7 @@ from __future__ import annotations
 import numpy as np
 
 from clearance_contact.compiled import jit
-from .rhs_kernels import add_point_jacobian, law_kernel, site_twists
+from .rhs_kernels import add_point_jacobian, law_kernel
 
 #: forward-difference steps of the contact-wrench derivatives (pose: m, rad; twist: m/s, rad/s),
 #: small against the penetrations (~1e-6..1e-5 m) and slip velocities the laws resolve
@@ -108,22 +108,22 @@ def add_site_stiffness(placements, J, masks, frame_outer, frame_inner, derivativ
 
 
 @jit
-def site_stiffness(law_id, parameters, placements, J, masks, frame_outer, frame_inner, v, onset, twists, out, wrench_outer, wrench_inner, derivative, G, perturbed, dtau_dpose, dtau_dtwist):
+def site_stiffness(law_id, parameters, placements, J, masks, frame_outer, frame_inner, onset, twists, out, wrench_outer, wrench_inner, derivative, G, perturbed, dtau_dpose, dtau_dtwist):
     """Add one clearance joint's ``dtau_c/dxi`` and ``dtau_c/dv`` (zero out of contact); returns the law's status.
 
-    Its twists and law at the current kinematics; if any wrench entry is nonzero
-    (in contact), the 12 x 24 derivative of its wrenches with respect to both
-    frames' poses and twists (:func:`site_derivative`), chained by
-    :func:`add_site_stiffness`. Scratch: ``derivative`` (12 x 24), ``G`` (12 x nv),
-    ``perturbed`` (see :func:`site_derivative`).
+    Reads the joint's frame twists (``twists``) and law output (``out``) as the
+    right-hand side left them at this state (:func:`robot.rhs_kernels.all_sites`,
+    same kinematics): if any wrench entry is nonzero (in contact), the 12 x 24
+    derivative of its wrenches with respect to both frames' poses and twists
+    (:func:`site_derivative`), chained by :func:`add_site_stiffness`. Scratch:
+    ``derivative`` (12 x 24), ``G`` (12 x nv), ``perturbed`` (see
+    :func:`site_derivative`).
     """
-    site_twists(placements, J, masks, frame_outer, frame_inner, v, twists)
+    if wrench_is_zero(out, wrench_outer, wrench_inner):
+        return 0
     outer_rotation = placements[frame_outer, 0:9].reshape((3, 3)).T
     inner_rotation = placements[frame_inner, 0:9].reshape((3, 3)).T
     outer_position, inner_position = placements[frame_outer, 9:12], placements[frame_inner, 9:12]
-    status = law_kernel(law_id, parameters, outer_rotation, outer_position, twists[0], inner_rotation, inner_position, twists[1], onset, out)
-    if status != 0 or wrench_is_zero(out, wrench_outer, wrench_inner):
-        return status
     status = site_derivative(law_id, parameters, outer_rotation, outer_position, twists[0], inner_rotation, inner_position, twists[1], onset, out, wrench_outer, wrench_inner, derivative, perturbed)
     if status != 0:
         return status

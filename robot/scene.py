@@ -73,7 +73,7 @@ from clearance_contact import (
 from .errors import SceneError
 from .simulation import FailureLimits, SolverOptions
 from .integrators import FIXED_STEP_METHODS, METHODS
-from .state_jacobian import JACOBIAN_CHOICES, STRUCTURED
+from .state_jacobian import STRUCTURED
 from .dynamics import Baumgarte
 
 SCENE_DIR = Path(__file__).resolve().parent / "scenes"
@@ -348,17 +348,16 @@ def load_scene(name_or_path: str | Path, **overrides: Any) -> Scene:
         hint = " (the CVODE methods need the scikit-sundae package: pip install scikit-sundae)" if method.startswith("CVODE") else ""
         raise SceneError(f"{where} [solver]: method={method!r} is not on offer{hint}; choose one of {', '.join(METHODS)}")
     w = f"{where} [solver]"
-    jacobian = solver_table.get("jacobian", STRUCTURED)
-    if jacobian not in JACOBIAN_CHOICES:
-        raise SceneError(f"{w}: jacobian={jacobian!r} is not on offer; choose one of {', '.join(JACOBIAN_CHOICES)}")
-    solver = SolverOptions(
-        method,
+    numbers = (
         _number(solver_table, "rtol", w, 1e-7, low=1e-14, high=1e-1),
         _number(solver_table, "atol", w, 1e-9, low=1e-16, high=1e-1),
         _number(solver_table, "max_step", w, 1e-3, low=0.0, low_open=True),
         _number(solver_table, "first_step", w, None, low=0.0, low_open=True),
-        jacobian=jacobian,
     )
+    try:
+        solver = SolverOptions(method, *numbers, jacobian=solver_table.get("jacobian", STRUCTURED))
+    except ValueError as exc:  # SolverOptions checks its choices (the jacobian)
+        raise SceneError(f"{w}: {exc}") from None
     if method in FIXED_STEP_METHODS and solver.first_step is None:
         raise SceneError(f"{w}: the fixed-step method {method} needs first_step (its step size)")
     baumgarte_table = _table(data, "baumgarte", where)

@@ -117,7 +117,7 @@ class SolverOptions:
 
     def __post_init__(self) -> None:
         if self.jacobian not in JACOBIAN_CHOICES:
-            raise ValueError(f"solver jacobian={self.jacobian!r} is not on offer; choose one of {', '.join(JACOBIAN_CHOICES)}")
+            raise ValueError(f"jacobian={self.jacobian!r} is not on offer; choose one of {', '.join(JACOBIAN_CHOICES)}")
 
 
 @dataclass(frozen=True)

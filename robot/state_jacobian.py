@@ -92,15 +92,18 @@ class StateJacobian:
         self.law_ids = [K.LAW_IDS[site.law_kernel] for site in compiled.sites]
         self.calls = 0
 
-    def contact_stiffness(self, t: float, v: np.ndarray, onset_rates: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """``(d tau_c/d xi, d tau_c/d v)`` at the kinematics in the workspace's data."""
+    def contact_stiffness(self, t: float, onset_rates: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """``(d tau_c/d xi, d tau_c/d v)`` at the state of the right-hand side last evaluated on the workspace.
+
+        Reuses that evaluation's frame twists and law outputs (no second evaluation).
+        """
         self.dtau_dpose[:] = 0.0
         self.dtau_dtwist[:] = 0.0
         compiled = self.compiled
         derivative, G, perturbed = self.scratch
         for index, (_, parameters, masks, outer, inner, candidates, twists, buffer, w_outer, w_inner) in enumerate(compiled.sites):
             status = JK.site_stiffness(
-                self.law_ids[index], parameters, compiled.placements, compiled.jacobian, masks, outer, inner, v, onset_rates[candidates],
+                self.law_ids[index], parameters, compiled.placements, compiled.jacobian, masks, outer, inner, onset_rates[candidates],
                 twists, buffer, w_outer, w_inner, derivative, G, perturbed, self.dtau_dpose, self.dtau_dtwist,
             )  # fmt: skip
             if status != 0:
@@ -120,7 +123,7 @@ class StateJacobian:
         driving_multipliers = data.lambda_c[first:].copy()
         q, v = pin.normalize(model, y[:nq]), y[nq : nq + nv]
         phi_q = self.compiled.phi_q
-        dtau_c_dxi, dtau_c_dv = self.contact_stiffness(t, v, onset_rates)
+        dtau_c_dxi, dtau_c_dv = self.contact_stiffness(t, onset_rates)
         drnea_dq, drnea_dv, _ = pin.computeRNEADerivatives(model, data, q, v, qdd)
         # M^-1 [Phi_q^T, F_xi, F_v] with one Cholesky factorisation (crba filled M's upper triangle)
         factor = cho_factor(data.M, lower=False, check_finite=False)

@@ -62,7 +62,7 @@ def test_stiff_blocks_equal_central_differences_in_contact(misaligned, states, s
         for column_name, column in columns.items():
             exact = differenced[row, column]
             error = np.linalg.norm(structured[row, column] - exact) / np.linalg.norm(exact)
-            assert error < 5e-3, f"{state}: d {row_name} / d {column_name}: relative error {error:.2e}"
+            assert error < 2e-3, f"{state}: d {row_name} / d {column_name}: relative error {error:.2e}"
     # the contact makes these blocks stiff and damped: ~1e8 1/s^2 and ~1e3 1/s, against ~1e2 and
     # ~1e1 out of contact
     assert np.linalg.norm(differenced[rows["accelerations"], columns["positions"]]) > 1e7
@@ -151,7 +151,7 @@ def test_a_refused_perturbation_falls_back_to_differences(misaligned, monkeypatc
     """A contact law refusing a perturbed input: that Jacobian is differenced instead, the run goes on."""
     refusals, fallbacks = [], []
 
-    def refuse(self, t, v, onset_rates):
+    def refuse(self, t, onset_rates):
         refusals.append(t)
         raise ContactError("refused for the test")
 
