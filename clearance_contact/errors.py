@@ -106,6 +106,28 @@ def state_array(name: str, value, shape: tuple) -> np.ndarray:
     return a
 
 
+#: the arguments of a joint's ``evaluate`` (and of its compiled kernel), in order
+STATE_NAMES = ("outer_rotation", "outer_position", "outer_twist", "inner_rotation", "inner_position", "inner_twist", "onset_rates")
+ROTATION_SHAPE, VECTOR_SHAPE, TWIST_SHAPE = (3, 3), (3,), (6,)
+
+
+def joint_state(
+    outer_rotation, outer_position, outer_twist, inner_rotation, inner_position, inner_twist, onset_rates, n_candidates: int
+) -> tuple:
+    """The seven arrays of a joint state (:data:`STATE_NAMES`) for a compiled kernel (:func:`state_array` each).
+
+    ValueError for a wrong shape or a value that is not numeric, naming the argument.
+    """
+    shapes = (ROTATION_SHAPE, VECTOR_SHAPE, TWIST_SHAPE, ROTATION_SHAPE, VECTOR_SHAPE, TWIST_SHAPE, (n_candidates,))
+    values = (outer_rotation, outer_position, outer_twist, inner_rotation, inner_position, inner_twist, onset_rates)
+    try:
+        return tuple(state_array(name, value, shape) for name, value, shape in zip(STATE_NAMES, values, shapes))
+    except (ValueError, TypeError) as exc:
+        raise ValueError(
+            f"expected rotations (3, 3), positions (3,), twists (6,) and onset_rates ({n_candidates},): {exc}"
+        ) from None
+
+
 def nonfinite_state_message(names: tuple, values: tuple) -> str:
     """Message of a ContactError for NaN / inf in a joint state: names the bad arguments."""
     bad = [f"{n}={np.asarray(v).tolist()!r}" for n, v in zip(names, values) if not np.all(np.isfinite(v))]

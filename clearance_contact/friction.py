@@ -367,3 +367,12 @@ class NoFriction:
     def force(self, normal_force: float, slip_velocity: ArrayLike) -> np.ndarray:
         """Always the zero vector (3,)."""
         return np.zeros(3)
+
+
+def require_friction_law(value) -> FrictionLaw:
+    """``value`` if it implements :class:`FrictionLaw`, else ContactParameterError."""
+    if not isinstance(value, FrictionLaw):
+        raise ContactParameterError(
+            f"friction={value!r} must implement FrictionLaw (coefficient(slip_speed), force(normal_force, slip_velocity))"
+        )
+    return value

@@ -152,3 +152,10 @@ def flat_punch_stiffness(radius: float, outer: Material, inner: Material) -> flo
     """
     a = require_positive("radius", radius)
     return 2.0 * combined_modulus(outer, inner) * a
+
+
+def require_material(name: str, value) -> Material:
+    """``value`` if it is a :class:`Material`, else ContactParameterError naming ``name``."""
+    if not isinstance(value, Material):
+        raise ContactParameterError(f"{name}={value!r} must be a clearance_contact.Material")
+    return value

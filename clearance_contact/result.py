@@ -62,6 +62,31 @@ class JointContact:
     wrench_outer: np.ndarray
     wrench_inner: np.ndarray
 
+    @classmethod
+    def from_output(cls, law, out: np.ndarray) -> "JointContact":
+        """Views of a law kernel's flat output ``out``, laid out by the offsets on ``law``.
+
+        ``law`` gives ``N_CANDIDATES`` (k), ``N_ECCENTRICITY`` (r) and the offsets
+        ``PENETRATION``, ``PENETRATION_RATE``, ``NORMAL_FORCE``, ``NORMAL`` (then
+        point_outer, point_inner, friction_force and eccentricity, 3 floats each per
+        row), ``WRENCH_OUTER``, ``WRENCH_INNER``, ``KIND`` (k kinds as floats).
+        """
+        k, r = law.N_CANDIDATES, law.N_ECCENTRICITY
+        vectors = out[law.NORMAL : law.NORMAL + 3 * (4 * k + r)].reshape(-1, 3)
+        return cls(
+            out[law.PENETRATION : law.PENETRATION + k],
+            out[law.PENETRATION_RATE : law.PENETRATION_RATE + k],
+            vectors[0:k],
+            vectors[k : 2 * k],
+            vectors[2 * k : 3 * k],
+            out[law.NORMAL_FORCE : law.NORMAL_FORCE + k],
+            vectors[3 * k : 4 * k],
+            out[law.KIND : law.KIND + k].astype(np.int64),
+            vectors[4 * k : 4 * k + r],
+            out[law.WRENCH_OUTER : law.WRENCH_OUTER + 6],
+            out[law.WRENCH_INNER : law.WRENCH_INNER + 6],
+        )
+
     @property
     def in_contact(self) -> np.ndarray:
         """(k,) bool: penetration > 0."""

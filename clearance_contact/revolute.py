@@ -212,14 +212,19 @@ from .compiled import (
     jit,
 )
 from .errors import (
+    ROTATION_SHAPE,
+    STATE_NAMES,
+    VECTOR_SHAPE,
     ContactError,
     ContactParameterError,
+    joint_state,
     nonfinite_state_message,
     require_in_range,
     require_positive,
     state_array,
 )
 from .friction import (
+    require_friction_law,
     FRICTION_EXTERNAL,
     FRICTION_NONE,
     FRICTION_PARAMETERS,
@@ -228,7 +233,7 @@ from .friction import (
     encoded_force_over_speed,
     friction_encoding,
 )
-from .materials import Material, cylinder_line_stiffness, flat_punch_stiffness
+from .materials import Material, cylinder_line_stiffness, flat_punch_stiffness, require_material
 from .normal_force import EXPONENT_RANGE, lankarani_nikravesh, validate_normal_law
 from .result import KIND_LINE, KIND_NONE, KIND_PLANE, KIND_POINT, JointContact
 
@@ -1051,14 +1056,9 @@ class RevoluteClearanceJoint:
                 f"journal_length={journal_length!r} must be larger than bearing_length={bearing_length!r} "
                 f"(axial clearance > 0; valid range ({l_b:g}, inf))"
             )
-        for name, material in (("journal_material", journal_material), ("bearing_material", bearing_material)):
-            if not isinstance(material, Material):
-                raise ContactParameterError(f"{name}={material!r} must be a clearance_contact.Material")
-        if not isinstance(friction, FrictionLaw):
-            raise ContactParameterError(
-                f"friction={friction!r} must implement FrictionLaw (coefficient(slip_speed), "
-                "force(normal_force, slip_velocity))"
-            )
+        require_material("journal_material", journal_material)
+        require_material("bearing_material", bearing_material)
+        require_friction_law(friction)
         n_r = require_in_range("radial_exponent", radial_exponent, *EXPONENT_RANGE)
         n_a = require_in_range("axial_exponent", axial_exponent, *EXPONENT_RANGE)
         n_p = require_in_range("point_exponent", point_exponent, *EXPONENT_RANGE)
@@ -1236,15 +1236,15 @@ class RevoluteClearanceJoint:
         Positive = contact.  Cheap (for event functions): no velocities, no forces.
         Runs :func:`revolute_penetration_kernel`.
         """
-        outer_rotation = state_array("outer_rotation", outer_rotation, _ROTATION)
-        inner_rotation = state_array("inner_rotation", inner_rotation, _ROTATION)
+        outer_rotation = state_array("outer_rotation", outer_rotation, ROTATION_SHAPE)
+        inner_rotation = state_array("inner_rotation", inner_rotation, ROTATION_SHAPE)
         out = np.empty(_K)
         status = revolute_penetration_kernel(
             self.kernel_parameters,
             outer_rotation,
-            state_array("outer_position", outer_position, _VECTOR),
+            state_array("outer_position", outer_position, VECTOR_SHAPE),
             inner_rotation,
-            state_array("inner_position", inner_position, _VECTOR),
+            state_array("inner_position", inner_position, VECTOR_SHAPE),
             out,
         )
         if status != STATUS_OK:
@@ -1283,20 +1283,7 @@ class RevoluteClearanceJoint:
         wrong shapes, :class:`~clearance_contact.errors.ContactError` for NaN / inf
         input or a journal turned by 90 deg or more.
         """
-        try:
-            state = (
-                state_array("outer_rotation", outer_rotation, _ROTATION),
-                state_array("outer_position", outer_position, _VECTOR),
-                state_array("outer_twist", outer_twist, _TWIST),
-                state_array("inner_rotation", inner_rotation, _ROTATION),
-                state_array("inner_position", inner_position, _VECTOR),
-                state_array("inner_twist", inner_twist, _TWIST),
-                state_array("onset_rates", onset_rates, (_K,)),
-            )
-        except (ValueError, TypeError) as exc:
-            raise ValueError(
-                f"expected rotations (3, 3), positions (3,), twists (6,) and onset_rates (4,): {exc}"
-            ) from None
+        state = joint_state(outer_rotation, outer_position, outer_twist, inner_rotation, inner_position, inner_twist, onset_rates, _K)
         out = np.empty(OUTPUT_SIZE)
         status = revolute_kernel(self.kernel_parameters, *state, out)
         if status == STATUS_EXTERNAL_FRICTION:
@@ -1304,26 +1291,13 @@ class RevoluteClearanceJoint:
         elif status == STATUS_AXIS_TILT:
             self._raise_tilt(state[0], state[3])
         elif status == STATUS_NONFINITE_INPUT:
-            raise ContactError(nonfinite_state_message(_STATE_NAMES, state))
+            raise ContactError(nonfinite_state_message(STATE_NAMES, state))
         elif status != STATUS_OK:
             raise ContactError(
                 f"non-finite penetration {out[PENETRATION:PENETRATION_RATE].tolist()!r}: check the poses "
                 "(NaN or inf input, or overflow)"
             )
-        vectors = out[NORMAL:WRENCH_OUTER].reshape(-1, 3)
-        return JointContact(
-            out[PENETRATION:PENETRATION_RATE],
-            out[PENETRATION_RATE:NORMAL_FORCE],
-            vectors[0:_K],  # normal
-            vectors[_K : 2 * _K],  # point_outer
-            vectors[2 * _K : 3 * _K],  # point_inner
-            out[NORMAL_FORCE:NORMAL],
-            vectors[3 * _K : 4 * _K],  # friction_force
-            out[KIND:CENTROID_DEPTH].astype(np.int64),
-            vectors[4 * _K : 4 * _K + 2],  # eccentricity
-            out[WRENCH_OUTER:WRENCH_INNER],
-            out[WRENCH_INNER:KIND],
-        )
+        return JointContact.from_output(self, out)
 
     def _apply_external_friction(self, outer_position: np.ndarray, inner_position: np.ndarray, out: np.ndarray) -> None:
         """Finish :func:`revolute_kernel`'s ``STATUS_EXTERNAL_FRICTION`` output with the user's friction law.
@@ -1366,15 +1340,3 @@ class RevoluteClearanceJoint:
         revolute_wrenches(outer_position, inner_position, out)
 
 
-_ROTATION = (3, 3)
-_VECTOR = (3,)
-_TWIST = (6,)
-_STATE_NAMES = (
-    "outer_rotation",
-    "outer_position",
-    "outer_twist",
-    "inner_rotation",
-    "inner_position",
-    "inner_twist",
-    "onset_rates",
-)

@@ -86,8 +86,18 @@ from .compiled import (
     norm3,
     jit,
 )
-from .errors import ContactError, ContactParameterError, nonfinite_state_message, require_positive, state_array
+from .errors import (
+    STATE_NAMES,
+    VECTOR_SHAPE,
+    ContactError,
+    ContactParameterError,
+    joint_state,
+    nonfinite_state_message,
+    require_positive,
+    state_array,
+)
 from .friction import (
+    require_friction_law,
     FRICTION_EXTERNAL,
     FRICTION_PARAMETERS,
     FrictionLaw,
@@ -95,7 +105,7 @@ from .friction import (
     encoded_force_over_speed,
     friction_encoding,
 )
-from .materials import Material, hertz_sphere_stiffness
+from .materials import Material, hertz_sphere_stiffness, require_material
 from .normal_force import lankarani_nikravesh, validate_normal_law
 from .result import KIND_NONE, KIND_POINT, JointContact
 
@@ -289,21 +299,7 @@ def spherical_penetration_kernel(parameters, outer_rotation, outer_position, inn
     return STATUS_OK
 
 
-_ROTATION = (3, 3)
 _ROTATION_UNUSED = np.eye(3)  # the spherical penetration does not depend on the rotations
-_VECTOR = (3,)
-_TWIST = (6,)
-
-
-_STATE_NAMES = (
-    "outer_rotation",
-    "outer_position",
-    "outer_twist",
-    "inner_rotation",
-    "inner_position",
-    "inner_twist",
-    "onset_rates",
-)
 
 
 class SphericalClearanceJoint:
@@ -383,14 +379,9 @@ class SphericalClearanceJoint:
                 f"socket_radius={socket_radius!r} must be larger than ball_radius={ball_radius!r} "
                 "(clearance must be > 0)"
             )
-        for name, material in (("ball_material", ball_material), ("socket_material", socket_material)):
-            if not isinstance(material, Material):
-                raise ContactParameterError(f"{name}={material!r} must be a clearance_contact.Material")
-        if not isinstance(friction, FrictionLaw):
-            raise ContactParameterError(
-                f"friction={friction!r} must implement FrictionLaw (coefficient(slip_speed), "
-                "force(normal_force, slip_velocity))"
-            )
+        require_material("ball_material", ball_material)
+        require_material("socket_material", socket_material)
+        require_friction_law(friction)
         if stiffness is None:
             if exponent != 1.5:
                 raise ContactParameterError(
@@ -485,8 +476,8 @@ class SphericalClearanceJoint:
     ) -> np.ndarray:
         """(1,) penetration delta = |b - s| - c (m), > 0 in contact.  Cheap (events)."""
         out = np.empty(_K)
-        outer_position = state_array("outer_position", outer_position, _VECTOR)
-        inner_position = state_array("inner_position", inner_position, _VECTOR)
+        outer_position = state_array("outer_position", outer_position, VECTOR_SHAPE)
+        inner_position = state_array("inner_position", inner_position, VECTOR_SHAPE)
         status = spherical_penetration_kernel(
             self.kernel_parameters, _ROTATION_UNUSED, outer_position, _ROTATION_UNUSED, inner_position, out
         )
@@ -516,15 +507,7 @@ class SphericalClearanceJoint:
         the returned arrays are views of one fresh output array.  Raises
         :class:`~clearance_contact.errors.ContactError` for NaN / inf input.
         """
-        state = (
-            state_array("outer_rotation", outer_rotation, _ROTATION),
-            state_array("outer_position", outer_position, _VECTOR),
-            state_array("outer_twist", outer_twist, _TWIST),
-            state_array("inner_rotation", inner_rotation, _ROTATION),
-            state_array("inner_position", inner_position, _VECTOR),
-            state_array("inner_twist", inner_twist, _TWIST),
-            state_array("onset_rates", onset_rates, (_K,)),
-        )
+        state = joint_state(outer_rotation, outer_position, outer_twist, inner_rotation, inner_position, inner_twist, onset_rates, _K)
         out = np.empty(OUTPUT_SIZE)
         parameters = self.kernel_parameters
         status = spherical_kernel(parameters, *state, out)
@@ -539,23 +522,10 @@ class SphericalClearanceJoint:
                 out[FRICTION_FORCE : FRICTION_FORCE + 3] = friction
             spherical_wrenches(parameters, out)
         elif status == STATUS_NONFINITE_INPUT:
-            raise ContactError(nonfinite_state_message(_STATE_NAMES, state))
+            raise ContactError(nonfinite_state_message(STATE_NAMES, state))
         elif status != STATUS_OK:
             raise ContactError(
                 f"non-finite penetration {out[PENETRATION]!r}: check the poses (NaN or inf input, or overflow): "
                 f"outer_position={state[1].tolist()!r}, inner_position={state[4].tolist()!r}"
             )
-        vectors = out[NORMAL:WRENCH_OUTER].reshape(5, 3)
-        return JointContact(
-            out[PENETRATION:PENETRATION_RATE],
-            out[PENETRATION_RATE:NORMAL_FORCE],
-            vectors[0:1],  # normal
-            vectors[1:2],  # point_outer
-            vectors[2:3],  # point_inner
-            out[NORMAL_FORCE:NORMAL],
-            vectors[3:4],  # friction_force
-            out[KIND:OUTPUT_SIZE].astype(np.int64),
-            vectors[4:5],  # eccentricity
-            out[WRENCH_OUTER:WRENCH_INNER],
-            out[WRENCH_INNER:KIND],
-        )
+        return JointContact.from_output(self, out)
