@@ -1,8 +1,8 @@
 """From a scene to a result: build the model the scene needs, set the initial state, integrate.
 
 The data flow is one way: scene (TOML) + URDF -> :class:`Run` (mechanism,
-dynamics model, initial state) -> :class:`robot.simulation.Trajectory` ->
-:class:`robot.results.SimulationResult` -> result file.
+dynamics model, initial state) -> :class:`robot.integration.simulation.Trajectory` ->
+:class:`robot.io.results.SimulationResult` -> result file.
 """
 
 from __future__ import annotations
@@ -14,15 +14,15 @@ from typing import Callable
 import numpy as np
 import pinocchio as pin
 
-from . import dynamics as D
-from .errors import SceneError
-from .initial_state import initial_state
-from .mechanism import Mechanism, build_mechanism
-from .platform_kinematics import PlatformLayout, inverse_kinematics
-from .results import SimulationResult, make_result, mechanism_fingerprint
-from .scene import Scene, load_scene, misalignment_rotation
-from .simulation import integrate
-from .trajectory import POSE_COORDINATES, FourierCoordinate, JointTrajectory, PlatformTrajectory, reference_platform_motion
+from robot.dynamics import equations as D
+from robot.errors import SceneError
+from robot.model.initial_state import initial_state
+from robot.model.mechanism import Mechanism, build_mechanism
+from robot.model.platform_kinematics import PlatformLayout, inverse_kinematics
+from robot.io.results import SimulationResult, make_result, mechanism_fingerprint
+from robot.scene.loader import Scene, load_scene, misalignment_rotation
+from robot.integration.simulation import integrate
+from robot.model.trajectory import POSE_COORDINATES, FourierCoordinate, JointTrajectory, PlatformTrajectory, reference_platform_motion
 
 
 @dataclass(frozen=True, eq=False)

@@ -1,8 +1,8 @@
-"""Animation export (robot.visualization, scripts/animate.py): fast checks, no browser.
+"""Animation export (robot.viz.animation, scripts/animate.py): fast checks, no browser.
 
 Results are made here without integrating (poses from the platform inverse
 kinematics plus a prescribed motion inside the clearance joints) and written
-with robot.results.save_result, so these tests do not depend on the
+with robot.io.results.save_result, so these tests do not depend on the
 simulator's speed; one test animates a real short simulation.
 """
 
@@ -21,11 +21,11 @@ import pytest
 import umsgpack
 
 from robot.errors import ResultFileError
-from robot.mechanism import build_mechanism
-from robot.platform_kinematics import PlatformLayout, inverse_kinematics
-from robot.results import SimulationResult, load_result, mechanism_fingerprint, save_result
-from robot.trajectory import reference_platform_motion
-from robot.visualization import (
+from robot.model.mechanism import build_mechanism
+from robot.model.platform_kinematics import PlatformLayout, inverse_kinematics
+from robot.io.results import SimulationResult, load_result, mechanism_fingerprint, save_result
+from robot.model.trajectory import reference_platform_motion
+from robot.viz.animation import (
     AnimationError,
     AnimationOptions,
     _exaggerated_inner,
@@ -272,7 +272,7 @@ def test_real_short_simulation_animates(tmp_path):
 def test_arrows_sit_at_the_contact_law_points():
     from clearance_contact import STEEL, RevoluteClearanceJoint
 
-    from robot.visualization import ElementSizes, _contacts, _drawing_law, _law_contacts
+    from robot.viz.animation import ElementSizes, _contacts, _drawing_law, _law_contacts
 
     size = ElementSizes("revolute", 0.02, 1e-4, 0.035, 0.04, 1e-4)
     law = _drawing_law(size, 1.0)
@@ -295,7 +295,7 @@ def test_arrows_sit_at_the_contact_law_points():
 def test_live_server_serves_the_scene():
     import urllib.request
 
-    from robot.visualization import serve_live
+    from robot.viz.animation import serve_live
 
     vis, summary = serve_live(synthetic_result(["S1"], n=5), speed=0.1)
     try:

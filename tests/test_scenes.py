@@ -7,9 +7,9 @@ import pytest
 
 from robot.errors import SceneError
 from robot.run import build_run, run_scene
-from robot.scene import load_scene, shipped_scenes
-from robot.simulation import SolverOptions
-from robot.studies.work_precision import DRIFT_TARGET
+from robot.scene.loader import load_scene, shipped_scenes
+from robot.integration.simulation import SolverOptions
+from robot.analysis.studies.work_precision import DRIFT_TARGET
 from robot.validation.settings import with_solver
 
 

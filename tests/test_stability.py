@@ -14,11 +14,11 @@ import dataclasses
 import numpy as np
 import pytest
 
-from robot.dynamics import Baumgarte
+from robot.dynamics.equations import Baumgarte
 from robot.run import build_run
-from robot.simulation import FAILED, FailureLimits, SolverOptions, integrate
-from robot.studies import stability
-from robot.studies.common import simulate
+from robot.integration.simulation import FAILED, FailureLimits, SolverOptions, integrate
+from robot.analysis.studies import stability
+from robot.analysis.studies.common import simulate
 
 # blown-up trial states make numpy and scipy warn on their way to the reported failure
 pytestmark = pytest.mark.filterwarnings("ignore::RuntimeWarning")
@@ -101,7 +101,7 @@ def test_wall_time_limit(misaligned):
 def test_hidden_contact_guard_finds_an_impact_inside_a_step():
     """Penetration < 0 at both ends of a step, > 0 inside: the guard samples the dense
     output and returns the onset (the first zero crossing)."""
-    from robot.simulation import _hidden_contact
+    from robot.integration.simulation import _hidden_contact
 
     def dense(t):
         return np.array([t])

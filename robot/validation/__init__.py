@@ -1,4 +1,4 @@
-"""Cross-checks of the Lagrange-multiplier model (``robot.dynamics``) against two other formulations.
+"""Cross-checks of the Lagrange-multiplier model (``robot.dynamics.equations``) against two other formulations.
 
 The seed paper validates its Lagrange model against ADAMS and against the
 Newton-Euler method. This package does both:
@@ -12,7 +12,7 @@ Newton-Euler method. This package does both:
   system at every right-hand-side evaluation and integrated with its own
   event-driven loop (:mod:`.event_loop`). It shares with the Lagrange model only
   the geometry input (the URDF, read by :mod:`.bodies`), the contact layer
-  (``clearance_contact``), the prescribed actuator histories (``robot.trajectory``)
+  (``clearance_contact``), the prescribed actuator histories (``robot.model.trajectory``)
   and the initial state (mapped from Pinocchio coordinates to absolute ones).
 * :mod:`.exudyn_model`: the same mechanism built in Exudyn (an independent C++
   multibody code, the role ADAMS plays in the paper): rigid bodies with Euler

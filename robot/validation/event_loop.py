@@ -1,6 +1,6 @@
 """A generic event-driven integration loop for penalty contact with onset state.
 
-``robot.simulation.integrate`` is written for the Pinocchio model (it takes a
+``robot.integration.simulation.integrate`` is written for the Pinocchio model (it takes a
 ``DynamicsModel``), so the Newton-Euler formulation has its own loop, doing the
 same thing for any ``rhs(t, y, onset)``:
 
@@ -25,7 +25,7 @@ same thing for any ``rhs(t, y, onset)``:
 
 ``scipy.integrate.solve_ivp`` with terminal events would locate the onsets too,
 but it only tests event functions at step ends, so impacts shorter than a step
-would be missed; hence this loop (the same design as ``robot.simulation``).
+would be missed; hence this loop (the same design as ``robot.integration.simulation``).
 A right-hand side that raises ``clearance_contact.ContactError`` (a trial stage
 of a too-large step in an absurd pose) answers with ``inf``: the step's error
 estimate is then infinite and the solver rejects and shrinks the step.
@@ -42,7 +42,7 @@ from scipy.integrate import DOP853, RK23, RK45
 from scipy.optimize import brentq
 
 from clearance_contact import ONSET_RATE_FLOOR, ContactError
-from robot.simulation import RECORD_ONSET, RECORD_PEAK, RECORD_START, RECORD_STEP, first_contact_time
+from robot.integration.simulation import RECORD_ONSET, RECORD_PEAK, RECORD_START, RECORD_STEP, first_contact_time
 
 #: the methods this loop supports (explicit Runge-Kutta with dense output)
 SOLVERS = {"RK45": RK45, "RK23": RK23, "DOP853": DOP853}
@@ -51,7 +51,7 @@ MAX_STALLED_RESTARTS = 20
 
 @dataclass
 class EventRun:
-    """Records of an event-driven run (like ``robot.simulation.Trajectory``)."""
+    """Records of an event-driven run (like ``robot.integration.simulation.Trajectory``)."""
 
     success: bool
     message: str

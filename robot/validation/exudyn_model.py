@@ -5,7 +5,7 @@ redundant-coordinate multibody code: Lagrange multipliers, index-3 constraints,
 implicit generalized-alpha integration. Only the geometry input
 (:mod:`.bodies`), the initial state (the Lagrange run's ``y0`` mapped to
 absolute coordinates, :func:`.newton_euler.initial_state`), the prescribed
-actuator lengths (``robot.trajectory``) and the contact law
+actuator lengths (``robot.model.trajectory``) and the contact law
 (``clearance_contact``) are shared; Exudyn builds and solves its own equations.
 
 Model
@@ -23,7 +23,7 @@ Model
   ``s_k``); the distance is set to ``s_k(t_{n+1})`` in a pre-step user function
   (Exudyn passes the end time of the step) and enforced at position level
   (index 3) at the end of the step. The driving force is the connector's
-  constraint force with the sign of ``robot.dynamics`` (positive pushes):
+  constraint force with the sign of ``robot.dynamics.equations`` (positive pushes):
   ``driving = -Force`` (the sign checked against the Lagrange model).
   The lengths ``s_k(t)`` come from :func:`actuator_lengths`.
   Why not a ``GenericJoint`` with all six axes locked and an ``offsetUserFunction``
@@ -71,13 +71,13 @@ from scipy.interpolate import CubicHermiteSpline
 
 from clearance_contact import ONSET_RATE_FLOOR
 
-from .. import constraints as C
-from ..kinematics import acceleration_analysis, assemble, velocity_analysis
-from ..scene import misalignment_rotation
-from ..mechanism import rotation_z_to
-from ..run import Run
-from . import newton_euler as NE
-from .bodies import read_geometry, rpy_matrix
+from robot.model import constraints as C
+from robot.model.kinematics import acceleration_analysis, assemble, velocity_analysis
+from robot.scene.loader import misalignment_rotation
+from robot.model.mechanism import rotation_z_to
+from robot.run import Run
+from robot.validation import newton_euler as NE
+from robot.validation.bodies import read_geometry, rpy_matrix
 
 #: spacing (s) of the exact actuator lengths the drive spline goes through
 DRIVE_TABLE_SPACING = 2e-4
@@ -129,7 +129,7 @@ def _ep_G(ep: np.ndarray) -> np.ndarray:
 def kinematic_accelerations(run: Run, geometry, t: float = 0.0) -> np.ndarray:
     """COM accelerations and Euler-parameter second derivatives (n, 7) of the ideal mechanism at time t.
 
-    Position, velocity and acceleration analysis (``robot.kinematics``) of the
+    Position, velocity and acceleration analysis (``robot.model.kinematics``) of the
     mechanism with its clearance joints replaced by the ideal joints (centred,
     with the scene's initial misalignment), driven by the prescribed lengths.
     """

@@ -33,7 +33,7 @@ stabilised acceleration constraint, each evaluation solves the augmented system
 (Schur-complement) form, exact for the block-diagonal ``M``:
 ``(Phi_q M^-1 Phi_q^T) lambda = Phi_q M^-1 Q - rhs``, ``a = M^-1 (Q - Phi_q^T lambda)``.
 ``Phi_dot = Phi_q [v; w'] + Phi_t``. The driving force of actuator k is
-``-lambda_k`` (positive: the actuator pushes), as in ``robot.dynamics``.
+``-lambda_k`` (positive: the actuator pushes), as in ``robot.dynamics.equations``.
 
 Clearance joints impose no constraint (the joint or closure is left out); the
 contact layer ``clearance_contact`` gives the wrenches ``[f, m]`` about each
@@ -52,12 +52,12 @@ from dataclasses import dataclass, field
 import numpy as np
 import pinocchio as pin
 
-from ..mechanism import rotation_z_to
-from ..run import Run
-from ..simulation import SolverOptions
-from .absolute_constraints import BodyStates, ConstraintSet, cross
-from .bodies import MechanismGeometry, read_geometry, rpy_matrix
-from .event_loop import EventRun, integrate_with_events
+from robot.model.mechanism import rotation_z_to
+from robot.run import Run
+from robot.integration.simulation import SolverOptions
+from robot.validation.absolute_constraints import BodyStates, ConstraintSet, cross
+from robot.validation.bodies import MechanismGeometry, read_geometry, rpy_matrix
+from robot.validation.event_loop import EventRun, integrate_with_events
 
 GRAVITY = np.array([0.0, 0.0, -9.81])
 

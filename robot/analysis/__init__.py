@@ -1,0 +1,1 @@
+"""Analyses of results: the paper study, work-precision and stability studies."""

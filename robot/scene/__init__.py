@@ -1,0 +1,1 @@
+"""Scenes: TOML files and run configuration (no Pinocchio)."""
