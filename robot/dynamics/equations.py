@@ -38,6 +38,7 @@ import pinocchio as pin
 
 from clearance_contact import ContactError, SphericalClearanceJoint
 
+from robot.dynamics.baumgarte import Baumgarte
 from robot.model import constraints as C
 from robot.dynamics import rhs_kernels as K
 from robot.model.mechanism import ClearanceSite, Mechanism
@@ -72,20 +73,6 @@ class ContactSite:
     @property
     def candidates(self) -> slice:
         return slice(self.first_candidate, self.first_candidate + self.law.n_candidates)
-
-
-@dataclass(frozen=True)
-class Baumgarte:
-    """Baumgarte gains: ``Phidd + 2 alpha Phid + beta^2 Phi = 0`` (paper ref. 35)."""
-
-    alpha: float = 5.0
-    beta: float = 5.0
-
-    def __post_init__(self) -> None:
-        for name in ("alpha", "beta"):
-            value = getattr(self, name)
-            if not (math.isfinite(value) and value >= 0.0):
-                raise ValueError(f"Baumgarte {name}={value!r} must be a finite number >= 0")
 
 
 @dataclass(frozen=True, eq=False)

@@ -64,9 +64,7 @@ from robot.dynamics import equations as D
 from robot.dynamics import jacobian_kernels as JK
 from robot.dynamics import rhs_kernels as K
 
-#: ``SolverOptions.jacobian`` values
-STRUCTURED, FINITE_DIFFERENCE = "structured", "finite-difference"
-JACOBIAN_CHOICES = (STRUCTURED, FINITE_DIFFERENCE)
+from robot.integration.options import FINITE_DIFFERENCE, JACOBIAN_CHOICES, STRUCTURED  # noqa: F401 (re-exported)
 
 
 class StateJacobian:

@@ -71,10 +71,9 @@ from clearance_contact import (
 )
 
 from robot.errors import SceneError
-from robot.integration.simulation import FailureLimits, SolverOptions
+from robot.dynamics.baumgarte import Baumgarte
+from robot.integration.options import STRUCTURED, FailureLimits, SolverOptions
 from robot.integration.solvers import FIXED_STEP_METHODS, METHODS
-from robot.dynamics.state_jacobian import STRUCTURED
-from robot.dynamics.equations import Baumgarte
 
 SCENE_DIR = Path(__file__).resolve().parent / "scenes"
 
