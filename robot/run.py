@@ -2,14 +2,15 @@
 
 The data flow is one way: scene (TOML) + URDF -> :class:`Run` (mechanism,
 dynamics model, initial state) -> :class:`robot.integration.simulation.Trajectory` ->
-:class:`robot.io.results.SimulationResult` -> result file.
+:class:`robot.io.results.Result` -> result file.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Callable
+import math
+from typing import Any, Callable, Mapping
 
 import numpy as np
 import pinocchio as pin
@@ -19,7 +20,7 @@ from robot.errors import SceneError
 from robot.model.initial_state import initial_state
 from robot.model.mechanism import Mechanism, build_mechanism
 from robot.model.platform_kinematics import PlatformLayout, inverse_kinematics
-from robot.io.results import SimulationResult, make_result, mechanism_fingerprint
+from robot.io.results import Result, make_result, mechanism_fingerprint
 from robot.scene.loader import Scene, load_scene, misalignment_rotation
 from robot.integration.simulation import integrate
 from robot.model.trajectory import POSE_COORDINATES, FourierCoordinate, JointTrajectory, PlatformTrajectory, reference_platform_motion
@@ -100,12 +101,13 @@ def clearance_geometry(law) -> dict[str, float]:
     return {key: float(getattr(law, key)) for key in GEOMETRY_KEYS[law.n_candidates]}
 
 
-def run_scene(run: Run, progress: Callable[[float], None] | None = None) -> SimulationResult:
+def run_scene(run: Run, progress: Callable[[float], None] | None = None) -> Result:
     """Integrate a built run and compute its outputs (never raises on divergence: see ``status``)."""
     scene = run.scene
     trajectory = integrate(run.dynamics, run.y0, run.t_span, scene.solver, scene.limits, progress)
     metadata = {
         "mechanism": str(scene.mechanism_path.name),
+        "mechanism_path": str(scene.mechanism_path),
         "urdf_sha256": mechanism_fingerprint(run.mechanism.description.urdf_text),
         "clearance": list(scene.clearance_joints),
         "clearance_outer_on": {c.joint: c.outer_on for c in scene.clearances},
@@ -123,3 +125,32 @@ def run_scene(run: Run, progress: Callable[[float], None] | None = None) -> Simu
         "nv": run.mechanism.model.nv,
     }
     return make_result(scene.name, run.dynamics, trajectory, metadata)
+
+
+def simulate(
+    scene: Scene | str | Path,
+    overrides: Mapping[str, Any] | None = None,
+    *,
+    t_end: float | None = None,
+    progress: Callable[[float], None] | None = None,
+) -> Result:
+    """Run a scene and return its :class:`~robot.io.results.Result` (the public entry point).
+
+    ``scene``: a :class:`Scene` (from :func:`robot.load_scene`), a shipped scene's
+    name or a path to a scene file; ``overrides``: key paths and values applied
+    before validation (``{"clearance.R1.radial_clearance": 2e-4}``);
+    ``t_end``: simulated seconds (the scene's ``duration`` otherwise).
+    Bad input raises :class:`robot.errors.SceneError` (a subclass of
+    :class:`robot.Error`) before any integration; a run that stops (divergence,
+    interrupt) is returned with ``status`` -1, its ``cause`` and every record up
+    to the stop.
+    """
+    if t_end is not None and not (isinstance(t_end, (int, float)) and math.isfinite(t_end) and t_end > 0):
+        raise SceneError(f"t_end={t_end!r} must be a finite number of seconds > 0", key="t_end", value=t_end)
+    if not isinstance(scene, Scene):
+        scene = load_scene(scene)
+    changes = {**(overrides or {}), **({"duration": t_end} if t_end is not None else {})}
+    if changes:
+        scene = scene.with_changes(changes)
+    return run_scene(build_run(scene), progress)
+

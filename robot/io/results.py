@@ -2,8 +2,9 @@
 
 :func:`compute_outputs` evaluates the equations of motion once more at every
 recorded state (integration steps, contact onsets and penetration maxima) and
-returns the arrays users look at. :class:`SimulationResult` holds them with the
-run's status, message and counts (like ``scipy.integrate.solve_ivp``'s result).
+returns the arrays users look at. :class:`Result` holds them with the run's
+status, message and counts (like ``scipy.integrate.solve_ivp``'s ``OdeResult``),
+in memory and loaded from a file alike.
 :func:`save_result` writes one ``.npz`` atomically; :func:`load_result` reads it
 back and checks it.
 
@@ -76,9 +77,50 @@ _EVENT_KINDS = {"onset": RECORD_ONSET, "peak": RECORD_PEAK, "force_peak": RECORD
 LWA = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
 
 
+class JointSeries:
+    """The arrays of one clearance joint of a :class:`Result` (``result.joint("R1")``).
+
+    Attributes are the result's arrays ``NAME_*`` without the prefix:
+    ``penetration``, ``normal_force``, ``friction_force``, ``kind`` (n x candidates),
+    ``eccentricity`` and whatever else the joint type writes; ``keys()`` lists them.
+    """
+
+    def __init__(self, name: str, arrays: dict[str, np.ndarray]):
+        self.name = name
+        self._arrays = arrays
+
+    def keys(self) -> list[str]:
+        return sorted(self._arrays)
+
+    def __getattr__(self, key: str) -> np.ndarray:
+        arrays = self.__dict__.get("_arrays", {})
+        if key in arrays:
+            return arrays[key]
+        raise AttributeError(f"clearance joint {self.__dict__.get('name')!r} has no array {key!r}; it has {sorted(arrays)}")
+
+    def __getitem__(self, key: str) -> np.ndarray:
+        return getattr(self, key)
+
+    def __repr__(self) -> str:
+        return f"JointSeries({self.name!r}, keys={self.keys()})"
+
+
+#: counter names of :attr:`Result.counts` and their scipy ``OdeResult`` names
+COUNT_ALIASES = {"nfev": "n_rhs", "njev": "n_jacobians", "nsteps": "n_steps", "nrejected": "n_rejected", "nevents": "n_events"}
+
+
 @dataclass
-class SimulationResult:
-    """A finished (or stopped) run: status, message, counts and arrays."""
+class Result:
+    """One run, finished or stopped, in memory or loaded from a file (one type for both).
+
+    Follows :class:`scipy.integrate.OdeResult`: ``t``, the state (``q``, ``v``;
+    ``y`` stacks them as (nq + nv, n) like ``solve_ivp``), ``status`` (0 reached
+    the end, -1 stopped: see ``cause``), ``message``, ``success``, counts
+    ``nfev`` (right-hand-side calls), ``njev`` (Jacobians; ``None`` when the method
+    has none or does not count them), ``nsteps``, ``nrejected`` (``None`` when
+    unknown), ``nevents``. Per clearance joint: ``result.joint("R1").normal_force``.
+    Every array is also ``result["KEY"]`` (the module docstring lists them).
+    """
 
     scene: str
     status: int
@@ -94,11 +136,63 @@ class SimulationResult:
         return self.status == 0
 
     def __getitem__(self, key: str) -> np.ndarray:
-        return self.arrays[key]
+        try:
+            return self.arrays[key]
+        except KeyError:
+            raise KeyError(f"result of scene {self.scene!r} has no array {key!r}; it has {sorted(self.arrays)}") from None
+
+    def keys(self) -> list[str]:
+        return sorted(self.arrays)
+
+    @property
+    def t(self) -> np.ndarray:
+        return self.arrays["t"]
+
+    @property
+    def q(self) -> np.ndarray:
+        return self.arrays["q"]
+
+    @property
+    def v(self) -> np.ndarray:
+        return self.arrays["v"]
+
+    @property
+    def y(self) -> np.ndarray:
+        return np.hstack([self.q, self.v]).T
+
+    def __getattr__(self, name: str):
+        if name in COUNT_ALIASES:
+            value = self.__dict__["counts"].get(COUNT_ALIASES[name])
+            return None if value is None or value < 0 else int(value)
+        raise AttributeError(f"{type(self).__name__!r} object has no attribute {name!r}")
 
     @property
     def clearance_joints(self) -> list[str]:
         return list(self.metadata.get("clearance", []))
+
+    def joint(self, name: str) -> JointSeries:
+        """The arrays of clearance joint ``name`` (one of :attr:`clearance_joints`)."""
+        if name not in self.clearance_joints:
+            raise ResultFileError(
+                f"joint={name!r} is not a clearance joint of scene {self.scene!r}; its clearance joints are {self.clearance_joints}"
+            )
+        prefix = f"{name}_"
+        return JointSeries(name, {k[len(prefix):]: v for k, v in self.arrays.items() if k.startswith(prefix)})
+
+    def save(self, path: str | Path) -> Path:
+        """Write the result file (:func:`save_result`)."""
+        return save_result(self, path)
+
+    def __repr__(self) -> str:
+        n = len(self.arrays.get("t", ()))
+        return (
+            f"Result(scene={self.scene!r}, status={self.status}, success={self.success}, t_end={self.t_end:g}, "
+            f"records={n}, nfev={self.nfev}, nsteps={self.nsteps}, clearance_joints={self.clearance_joints}, message={self.message!r})"
+        )
+
+
+#: the former name of :class:`Result` (kept as an alias)
+SimulationResult = Result
 
 
 def compute_outputs(dynamics: D.DynamicsModel, trajectory: Trajectory) -> dict[str, np.ndarray]:
@@ -172,13 +266,14 @@ def compute_outputs(dynamics: D.DynamicsModel, trajectory: Trajectory) -> dict[s
     return out
 
 
-def make_result(scene_name: str, dynamics: D.DynamicsModel, trajectory: Trajectory, metadata: dict[str, Any]) -> SimulationResult:
+def make_result(scene_name: str, dynamics: D.DynamicsModel, trajectory: Trajectory, metadata: dict[str, Any]) -> Result:
     counts = {
         "n_steps": trajectory.n_steps,
         "n_rejected": trajectory.n_rejected,
         "n_rhs": trajectory.n_rhs,
         "n_events": trajectory.n_events,
         "n_restarts": trajectory.n_restarts,
+        "n_jacobians": trajectory.n_jacobians,
         "cpu_time": trajectory.cpu_time,
         "wall_time": trajectory.wall_time,
     }
@@ -189,10 +284,10 @@ def make_result(scene_name: str, dynamics: D.DynamicsModel, trajectory: Trajecto
         arrays["event_is_onset"] = np.array([e[2] == "onset" for e in trajectory.events])
         arrays["event_kind"] = np.array([_EVENT_KINDS[e[2]] for e in trajectory.events], dtype=np.int8)
         arrays["event_value"] = np.array([e[3] for e in trajectory.events])
-    return SimulationResult(scene_name, trajectory.status, trajectory.message, trajectory.cause, trajectory.t_end, counts, arrays, metadata)
+    return Result(scene_name, trajectory.status, trajectory.message, trajectory.cause, trajectory.t_end, counts, arrays, metadata)
 
 
-def save_result(result: SimulationResult, path: str | Path) -> Path:
+def save_result(result: Result, path: str | Path) -> Path:
     """Write the result as one ``.npz`` file, atomically (header as JSON in ``__meta__``)."""
     header = {
         "format_version": FORMAT_VERSION,
@@ -216,7 +311,7 @@ def save_result(result: SimulationResult, path: str | Path) -> Path:
     return atomic_write(path, write)
 
 
-def load_result(path: str | Path, *, urdf_text: str | None = None) -> SimulationResult:
+def load_result(path: str | Path, *, urdf_text: str | None = None) -> Result:
     """Read a result file written by :func:`save_result`.
 
     Raises :class:`ResultFileError` if the file is missing or malformed, or (when
@@ -249,7 +344,7 @@ def load_result(path: str | Path, *, urdf_text: str | None = None) -> Simulation
         )
     for key in header.get("counts", {}):
         arrays.pop(key, None)
-    return SimulationResult(
+    return Result(
         header["scene"], header["status"], header["message"], header["cause"], header["t_end"], header["counts"], arrays, metadata
     )
 

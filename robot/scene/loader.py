@@ -6,7 +6,7 @@ integrator, its tolerances and the Baumgarte gains. Building a scene builds only
 what it uses: the mechanism is loaded with exactly its clearance joints
 (:func:`robot.model.mechanism.build_mechanism`).
 
-Shipped scenes live in ``robot/scenes/*.toml`` and are found by name; any other
+Shipped scenes live in ``robot/scene/scenes/*.toml`` and are found by name; any other
 path to a ``.toml`` file works too. ``extends = "NAME_OR_PATH"`` starts from
 another scene and overrides it table by table (arrays of tables such as
 ``[[clearance]]`` are replaced whole). Unknown keys and bad values raise
@@ -52,11 +52,12 @@ Schema (defaults in brackets)::
 
 from __future__ import annotations
 
+import copy
 import math
 import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import Any, Mapping
 
 import numpy as np
 
@@ -71,6 +72,7 @@ from clearance_contact import (
 )
 
 from robot.errors import SceneError
+from robot.scene.overrides import apply_overrides
 from robot.dynamics.baumgarte import Baumgarte
 from robot.integration.options import STRUCTURED, FailureLimits, SolverOptions
 from robot.integration.solvers import FIXED_STEP_METHODS, METHODS
@@ -126,6 +128,19 @@ class Scene:
     limits: FailureLimits
     clearances: tuple[ClearanceSpec, ...] = field(default_factory=tuple)
     misalignment_deg: dict[str, float] = field(default_factory=dict)
+    #: the scene's TOML document as resolved (``extends`` merged, overrides applied)
+    document: dict[str, Any] = field(default_factory=dict, compare=False, repr=False)
+    #: the folder that relative paths of the document are relative to
+    base_dir: Path | None = field(default=None, compare=False, repr=False)
+
+    def with_changes(self, overrides: Mapping[str, Any]) -> "Scene":
+        """A new scene: this one's document with key paths changed, validated again.
+
+        ``scene.with_changes({"solver.rtol": 1e-8, "clearance.R1.radial_clearance": 2e-4})``
+        """
+        if self.path is None or self.base_dir is None:
+            raise SceneError("this scene was not loaded from a document; build it with load_scene(...)")
+        return scene_from_document(apply_overrides(self.document, overrides), self.path, self.base_dir)
 
     @property
     def clearance_joints(self) -> tuple[str, ...]:
@@ -161,7 +176,7 @@ def _read(path: Path, seen: tuple[Path, ...] = ()) -> dict:
         data.setdefault("__dir__", str(path.parent))
         return data
     if not isinstance(parent, str):
-        raise SceneError(f"scene {path.name}: extends={parent!r} must be a scene name or path")
+        raise SceneError(f"scene {path.name}: extends={parent!r} must be a scene name or path", key="extends", value=parent)
     # a .toml parent is a path relative to this scene; anything else a shipped scene name
     parent_path = resolve_scene_path(path.parent / parent if parent.endswith(".toml") else parent)
     merged = _read(parent_path, seen + (path,))
@@ -178,21 +193,23 @@ def _read(path: Path, seen: tuple[Path, ...] = ()) -> dict:
 def _unknown(table: dict, allowed: set[str], where: str) -> None:
     unknown = sorted(set(table) - allowed)
     if unknown:
-        raise SceneError(f"{where}: unknown key(s) {', '.join(unknown)}; valid keys: {', '.join(sorted(allowed))}")
+        raise SceneError(
+            f"{where}: unknown key(s) {', '.join(unknown)}; valid keys: {', '.join(sorted(allowed))}", key=unknown[0], value=table[unknown[0]]
+        )
 
 
 def _number(table: dict, key: str, where: str, default=None, *, low=-math.inf, high=math.inf, low_open=False, required=False) -> float:
     if key not in table:
         if required:
-            raise SceneError(f"{where}: missing required key {key!r}")
+            raise SceneError(f"{where}: missing required key {key!r}", key=key)
         return default
     value = table[key]
     if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
-        raise SceneError(f"{where}: {key}={value!r} must be a finite number")
+        raise SceneError(f"{where}: {key}={value!r} must be a finite number", key=key, value=value)
     ok = (value > low if low_open else value >= low) and value <= high
     if not ok:
         bracket = "(" if low_open else "["
-        raise SceneError(f"{where}: {key}={value!r} is out of range {bracket}{low}, {high}]")
+        raise SceneError(f"{where}: {key}={value!r} is out of range {bracket}{low}, {high}]", key=key, value=value)
     return float(value)
 
 
@@ -215,7 +232,7 @@ def _materials(data: dict, where: str) -> dict[str, Material]:
                 _number(table, "youngs_modulus", w, required=True), _number(table, "poisson_ratio", w, required=True)
             )
         except ContactError as exc:
-            raise SceneError(f"{w}: {exc}") from None
+            raise SceneError(f"{w}: {exc}", key=getattr(exc, "key", None), value=getattr(exc, "value", None)) from None
     return out
 
 
@@ -238,7 +255,7 @@ def _friction(table: Any, where: str):
         )
     if law == "coulomb":
         return CoulombFriction(_number(table, "coefficient", where, required=True), _number(table, "regularisation_velocity", where, 0.0))
-    raise SceneError(f"{where}: friction law={law!r} is not known; use 'brown_mcphee', 'coulomb' or 'none'")
+    raise SceneError(f"{where}: friction law={law!r} is not known; use 'brown_mcphee', 'coulomb' or 'none'", key="law", value=law)
 
 
 def _clearance(table: Any, index: int, materials: dict[str, Material], where: str) -> ClearanceSpec:
@@ -247,15 +264,15 @@ def _clearance(table: Any, index: int, materials: dict[str, Material], where: st
         raise SceneError(f"{w} must be a table")
     kind = table.get("type")
     if kind not in ("spherical", "revolute"):
-        raise SceneError(f"{w}: type={kind!r} must be 'spherical' or 'revolute'")
+        raise SceneError(f"{w}: type={kind!r} must be 'spherical' or 'revolute'", key="type", value=kind)
     _unknown(table, _SPHERICAL_KEYS if kind == "spherical" else _REVOLUTE_KEYS, w)
     joint = table.get("joint")
     if not isinstance(joint, str) or not joint:
-        raise SceneError(f"{w}: joint={joint!r} must name the joint or closure it replaces")
+        raise SceneError(f"{w}: joint={joint!r} must name the joint or closure it replaces", key="joint", value=joint)
     w = f"{where} clearance {joint!r}"
     outer_on = table.get("outer_on", "child")
     if outer_on not in ("child", "parent"):
-        raise SceneError(f"{w}: outer_on={outer_on!r} must be 'child' or 'parent'")
+        raise SceneError(f"{w}: outer_on={outer_on!r} must be 'child' or 'parent'", key="outer_on", value=outer_on)
 
     def material(key: str) -> Material:
         name = table.get(key, table.get("material", "steel"))
@@ -294,7 +311,7 @@ def _clearance(table: Any, index: int, materials: dict[str, Material], where: st
                 **optional,
             )
     except ContactError as exc:
-        raise SceneError(f"{w}: {exc}") from None
+        raise SceneError(f"{w}: {exc}", key=getattr(exc, "key", None), value=getattr(exc, "value", None)) from None
     return ClearanceSpec(joint, kind, outer_on, law)
 
 
@@ -302,7 +319,7 @@ def _trajectory(table: dict, where: str) -> TrajectorySpec:
     w = f"{where} [trajectory]"
     kind = table.get("type", "platform")
     if kind not in ("platform", "joints"):
-        raise SceneError(f"{w}: type={kind!r} must be 'platform' or 'joints'")
+        raise SceneError(f"{w}: type={kind!r} must be 'platform' or 'joints'", key="type", value=kind)
     period = _number(table, "period", w, 1.0, low=0.0, low_open=True)
     preset = table.get("preset")
     coordinates = {k: v for k, v in table.items() if k not in ("type", "period", "preset")}
@@ -311,7 +328,7 @@ def _trajectory(table: dict, where: str) -> TrajectorySpec:
 
         _unknown(coordinates, set(POSE_COORDINATES), w)
         if preset not in (None, "reference"):
-            raise SceneError(f"{w}: preset={preset!r} is not known; use 'reference' or give x, z, roll, pitch, yaw")
+            raise SceneError(f"{w}: preset={preset!r} is not known; use 'reference' or give x, z, roll, pitch, yaw", key="preset", value=preset)
         if preset is None and set(coordinates) != set(POSE_COORDINATES):
             raise SceneError(f"{w}: a platform trajectory needs preset = 'reference' or all of {', '.join(POSE_COORDINATES)}")
     elif preset is not None:
@@ -326,17 +343,30 @@ def _trajectory(table: dict, where: str) -> TrajectorySpec:
     return TrajectorySpec(kind, period, preset, coordinates)
 
 
-def load_scene(name_or_path: str | Path, **overrides: Any) -> Scene:
-    """Read and validate a scene (``overrides``: top-level keys such as ``duration``)."""
+def load_scene(name_or_path: str | Path, overrides: Mapping[str, Any] | None = None, **top_level: Any) -> Scene:
+    """Read and validate a scene.
+
+    ``overrides``: key paths and values (``{"solver.rtol": 1e-8,
+    "clearance.R1.radial_clearance": 2e-4}``, :mod:`robot.scene.overrides`);
+    ``top_level``: top-level keys as keyword arguments (``duration=0.1``; ``None``
+    values are ignored). Both are validated like the file itself.
+    """
     path = resolve_scene_path(name_or_path)
     data = _read(path)
     base_dir = Path(data.pop("__dir__"))
-    data.update({k: v for k, v in overrides.items() if v is not None})
+    data = apply_overrides(data, {**(overrides or {}), **{k: v for k, v in top_level.items() if v is not None}})
+    return scene_from_document(data, path, base_dir)
+
+
+def scene_from_document(data: dict[str, Any], path: Path, base_dir: Path) -> Scene:
+    """Validate a scene's TOML document (``extends`` already merged); relative paths from ``base_dir``."""
+    document = copy.deepcopy(data)
+    data = copy.deepcopy(data)
     where = f"scene {path.name}"
     _unknown(data, _TOP_KEYS, where)
     mechanism = data.get("mechanism")
     if not isinstance(mechanism, str):
-        raise SceneError(f"{where}: mechanism={mechanism!r} must be the path of a URDF file")
+        raise SceneError(f"{where}: mechanism={mechanism!r} must be the path of a URDF file", key="mechanism", value=mechanism)
     mechanism_path = (base_dir / mechanism).resolve()
     if not mechanism_path.is_file():
         raise SceneError(f"{where}: mechanism file {str(mechanism_path)!r} does not exist")
@@ -345,7 +375,7 @@ def load_scene(name_or_path: str | Path, **overrides: Any) -> Scene:
     method = solver_table.get("method", "RK45")
     if method not in METHODS:
         hint = " (the CVODE methods need the scikit-sundae package: pip install scikit-sundae)" if method.startswith("CVODE") else ""
-        raise SceneError(f"{where} [solver]: method={method!r} is not on offer{hint}; choose one of {', '.join(METHODS)}")
+        raise SceneError(f"{where} [solver]: method={method!r} is not on offer{hint}; choose one of {', '.join(METHODS)}", key="method", value=method)
     w = f"{where} [solver]"
     numbers = (
         _number(solver_table, "rtol", w, 1e-7, low=1e-14, high=1e-1),
@@ -356,7 +386,7 @@ def load_scene(name_or_path: str | Path, **overrides: Any) -> Scene:
     try:
         solver = SolverOptions(method, *numbers, jacobian=solver_table.get("jacobian", STRUCTURED))
     except ValueError as exc:  # SolverOptions checks its choices (the jacobian)
-        raise SceneError(f"{w}: {exc}") from None
+        raise SceneError(f"{w}: {exc}", key=getattr(exc, "key", None), value=getattr(exc, "value", None)) from None
     if method in FIXED_STEP_METHODS and solver.first_step is None:
         raise SceneError(f"{w}: the fixed-step method {method} needs first_step (its step size)")
     baumgarte_table = _table(data, "baumgarte", where)
@@ -393,7 +423,7 @@ def load_scene(name_or_path: str | Path, **overrides: Any) -> Scene:
         _number(misalignment, joint, f"{where} [initial] misalignment_deg", low=-5.0, high=5.0)
     end_effector = data.get("end_effector", "platform")
     if not isinstance(end_effector, str):
-        raise SceneError(f"{where}: end_effector={end_effector!r} must be a frame name")
+        raise SceneError(f"{where}: end_effector={end_effector!r} must be a frame name", key="end_effector", value=end_effector)
     return Scene(
         name=str(data.get("name", path.stem)),
         path=path,
@@ -407,6 +437,8 @@ def load_scene(name_or_path: str | Path, **overrides: Any) -> Scene:
         limits=limits,
         clearances=clearances,
         misalignment_deg={k: float(v) for k, v in misalignment.items()},
+        document=document,
+        base_dir=base_dir,
     )
 
 

@@ -187,6 +187,9 @@ def load_for_animation(
         if not isinstance(name, str) or not name:
             raise ResultFileError(f"{label} does not name its mechanism file (metadata 'mechanism'); pass the URDF explicitly (--urdf)")
         urdf = URDF_DIR / Path(name).name
+        recorded = metadata.get("mechanism_path")
+        if not urdf.is_file() and isinstance(recorded, str) and Path(recorded).is_file():
+            urdf = Path(recorded)  # a user's mechanism, where the run found it
     urdf = Path(urdf)
     if not urdf.is_file():
         raise ResultFileError(f"{label} needs the mechanism file {str(urdf)!r}, which does not exist; pass the URDF explicitly (--urdf)")
@@ -854,6 +857,11 @@ def export_html(
     summary.html_path = atomic_write(Path(html_path), write)
     summary.html_bytes = len(encoded)
     return summary
+
+
+def animate(result: "str | Path | SimulationResult", html_path: str | Path, **options: Any) -> AnimationSummary:
+    """Write a result's animation to a self-contained HTML file (the public API name of :func:`export_html`)."""
+    return export_html(result, html_path, **options)
 
 
 def serve_live(
