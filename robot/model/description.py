@@ -104,35 +104,37 @@ def _frame(element: ET.Element | None, role: str, closure: str, links: set[str])
     return FrameOnLink(link, _vector(element, "xyz", f"{where} <{role}>"), _vector(element, "rpy", f"{where} <{role}>"))
 
 
-def parse_mechanism(source: str | Path, *, is_text: bool = False) -> MechanismDescription:
-    """Parse a URDF file (or text, ``is_text=True``) with closure declarations.
-
-    Raises :class:`MechanismFileError` for unreadable XML, a missing ``<robot>``
-    root, duplicate names, closures naming missing links, unknown closure types,
-    a revolute closure without a non-zero axis, or a transmission naming a
-    missing joint.
-    """
-    path = None
+def _read_text(source: str | Path, is_text: bool) -> tuple[str, Path | None]:
     if is_text:
-        text = str(source)
-    else:
-        path = Path(source)
-        if not path.is_file():
-            raise MechanismFileError(f"mechanism file {str(path)!r} does not exist")
-        text = path.read_text(encoding="utf-8")
-    label = str(path) if path else "<urdf text>"
-    try:
-        root = ET.fromstring(text)
-    except ET.ParseError as exc:
-        raise MechanismFileError(f"{label}: malformed XML ({exc}); fix the file or regenerate it") from None
-    if root.tag != "robot":
-        raise MechanismFileError(f"{label}: root element is <{root.tag}>, a URDF needs <robot>")
+        return str(source), None
+    path = Path(source)
+    if not path.is_file():
+        raise MechanismFileError(f"mechanism file {str(path)!r} does not exist")
+    return path.read_text(encoding="utf-8"), path
+
+
+def _links(root: ET.Element, label: str) -> list[str]:
     links = [link.get("name", "") for link in root.findall("link")]
     if "" in links:
         raise MechanismFileError(f"{label}: a <link> has no name")
     if len(set(links)) != len(links):
         raise MechanismFileError(f"{label}: duplicate link names")
-    link_set = set(links)
+    return links
+
+
+def _limits(element: ET.Element, name: str, kind: str, label: str) -> tuple[float | None, float | None]:
+    limit = element.find("limit")
+    if limit is None or kind not in ("prismatic", "revolute"):
+        return None, None
+    try:
+        lower = float(limit.get("lower", "nan"))
+        upper = float(limit.get("upper", "nan"))
+    except ValueError:
+        raise MechanismFileError(f"{label}: joint {name!r} has non-numeric limits") from None
+    return (None if np.isnan(lower) else lower), (None if np.isnan(upper) else upper)
+
+
+def _joints(root: ET.Element, link_set: set[str], label: str) -> dict[str, JointDeclaration]:
     joints: dict[str, JointDeclaration] = {}
     for element in root.findall("joint"):
         name = element.get("name")
@@ -148,18 +150,24 @@ def parse_mechanism(source: str | Path, *, is_text: bool = False) -> MechanismDe
                 raise MechanismFileError(f"{label}: joint {name!r} {role} link {link!r} is not defined")
         axis_element = element.find("axis")
         axis = _vector(axis_element, "xyz", f"joint {name!r} <axis>", "1 0 0") if axis_element is not None else (1.0, 0.0, 0.0)
-        limit = element.find("limit")
-        lower = upper = None
-        if limit is not None and kind in ("prismatic", "revolute"):
-            try:
-                lower = float(limit.get("lower", "nan"))
-                upper = float(limit.get("upper", "nan"))
-            except ValueError:
-                raise MechanismFileError(f"{label}: joint {name!r} has non-numeric limits") from None
-            lower = None if np.isnan(lower) else lower
-            upper = None if np.isnan(upper) else upper
+        lower, upper = _limits(element, name, kind, label)
         joints[name] = JointDeclaration(name, kind, parent.get("link"), child.get("link"), axis, lower, upper)
-    closures = []
+    return joints
+
+
+def _closure_axis(element: ET.Element, name: str, label: str) -> tuple[float, float, float]:
+    axis_element = element.find("axis")
+    if axis_element is None:
+        raise MechanismFileError(f"{label}: revolute closure {name!r} needs <axis xyz=.../>")
+    axis_vector = np.array(_vector(axis_element, "xyz", f"closure {name!r} <axis>"))
+    norm = float(np.linalg.norm(axis_vector))
+    if norm < 1e-12:
+        raise MechanismFileError(f"{label}: revolute closure {name!r} has a zero axis")
+    return tuple(float(x) for x in axis_vector / norm)
+
+
+def _closures(root: ET.Element, joints: dict, link_set: set[str], label: str) -> list[ClosureDeclaration]:
+    closures: list[ClosureDeclaration] = []
     closures_element = root.find("closures")
     for element in closures_element.findall("closure") if closures_element is not None else []:
         name = element.get("name")
@@ -172,17 +180,12 @@ def parse_mechanism(source: str | Path, *, is_text: bool = False) -> MechanismDe
             raise MechanismFileError(f"{label}: closure {name!r} has type={kind!r}; valid types: {', '.join(CLOSURE_TYPES)}")
         parent = _frame(element.find("parent"), "parent", name, link_set)
         child = _frame(element.find("child"), "child", name, link_set)
-        axis = None
-        if kind == "revolute":
-            axis_element = element.find("axis")
-            if axis_element is None:
-                raise MechanismFileError(f"{label}: revolute closure {name!r} needs <axis xyz=.../>")
-            axis_vector = np.array(_vector(axis_element, "xyz", f"closure {name!r} <axis>"))
-            norm = float(np.linalg.norm(axis_vector))
-            if norm < 1e-12:
-                raise MechanismFileError(f"{label}: revolute closure {name!r} has a zero axis")
-            axis = tuple(float(x) for x in axis_vector / norm)
+        axis = _closure_axis(element, name, label) if kind == "revolute" else None
         closures.append(ClosureDeclaration(name, kind, parent, child, axis))
+    return closures
+
+
+def _actuated(root: ET.Element, joints: dict, label: str) -> list[str]:
     actuated = []
     for transmission in root.findall("transmission"):
         for joint in transmission.findall("joint"):
@@ -194,12 +197,33 @@ def parse_mechanism(source: str | Path, *, is_text: bool = False) -> MechanismDe
             if joints[joint_name].kind not in ("prismatic", "revolute", "continuous"):
                 raise MechanismFileError(f"{label}: actuated joint {joint_name!r} must be 1-DOF, is {joints[joint_name].kind}")
             actuated.append(joint_name)
+    return actuated
+
+
+def parse_mechanism(source: str | Path, *, is_text: bool = False) -> MechanismDescription:
+    """Parse a URDF file (or text, ``is_text=True``) with closure declarations.
+
+    Raises :class:`MechanismFileError` for unreadable XML, a missing ``<robot>``
+    root, duplicate names, closures naming missing links, unknown closure types,
+    a revolute closure without a non-zero axis, or a transmission naming a
+    missing joint.
+    """
+    text, path = _read_text(source, is_text)
+    label = str(path) if path else "<urdf text>"
+    try:
+        root = ET.fromstring(text)
+    except ET.ParseError as exc:
+        raise MechanismFileError(f"{label}: malformed XML ({exc}); fix the file or regenerate it") from None
+    if root.tag != "robot":
+        raise MechanismFileError(f"{label}: root element is <{root.tag}>, a URDF needs <robot>")
+    links = _links(root, label)
+    joints = _joints(root, set(links), label)
     return MechanismDescription(
         path=path,
         name=root.get("name", "robot"),
         urdf_text=text,
         links=tuple(links),
         joints=joints,
-        closures=tuple(closures),
-        actuated_joints=tuple(actuated),
+        closures=tuple(_closures(root, joints, set(links), label)),
+        actuated_joints=tuple(_actuated(root, joints, label)),
     )

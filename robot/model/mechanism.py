@@ -204,6 +204,89 @@ def _free_joint_urdf(description: MechanismDescription, joint_names: Sequence[st
     return ET.tostring(root, encoding="unicode")
 
 
+def _clearance_tree_joints(description: MechanismDescription, choice: Mapping[str, str]) -> list[str]:
+    """The tree joints of ``choice`` (the rest are closures), checked: they become free joints."""
+    closure_names = {c.name for c in description.closures}
+    free_joints = []
+    for name in choice:
+        if name in closure_names:
+            continue
+        joint = description.joints.get(name)
+        if joint is None:
+            valid = sorted([n for n, j in description.joints.items() if j.kind in ("revolute", "continuous")] + list(closure_names))
+            raise ClearanceChoiceError(
+                f"clearance joint {name!r} is neither a joint nor a closure of {description.name!r}; "
+                f"joints that can carry clearance: {', '.join(valid)}"
+            )
+        if joint.kind not in ("revolute", "continuous"):
+            raise ClearanceChoiceError(
+                f"clearance joint {name!r} is a {joint.kind} joint; clearance is modelled for revolute joints "
+                "and spherical or revolute closures"
+            )
+        if name in description.actuated_joints:
+            raise ClearanceChoiceError(f"clearance joint {name!r} is actuated; an actuated joint cannot carry clearance")
+        free_joints.append(name)
+    return free_joints
+
+
+def _pinocchio_models(description: MechanismDescription, urdf_text: str) -> tuple[pin.Model, pin.GeometryModel, pin.GeometryModel]:
+    try:
+        model = pin.buildModelFromXML(urdf_text)
+    except (RuntimeError, ValueError) as exc:
+        raise MechanismFileError(f"Pinocchio could not build the model of {description.name!r}: {exc}") from None
+    try:
+        visual_model = pin.buildGeomFromUrdfString(model, urdf_text, pin.GeometryType.VISUAL)
+        collision_model = pin.buildGeomFromUrdfString(model, urdf_text, pin.GeometryType.COLLISION)
+    except (RuntimeError, ValueError) as exc:
+        raise MechanismFileError(f"geometry of {description.name!r} could not be built: {exc}") from None
+    return model, visual_model, collision_model
+
+
+def _site(name: str, kind: str, where: str, outer_on: str, parent_side: int, child_side: int, joint: str | None) -> ClearanceSite:
+    outer, inner = (child_side, parent_side) if outer_on == "child" else (parent_side, child_side)
+    return ClearanceSite(name, kind, where, outer, inner, outer_on, joint)
+
+
+def _closures_and_sites(model: pin.Model, description: MechanismDescription, choice: Mapping[str, str], free_joints: list[str]):
+    """Ideal closures (frame pairs) and clearance sites (element frames) added to ``model``."""
+    closures, sites = [], []
+    for declaration in description.closures:
+        if declaration.name in choice:
+            names = _element_names(declaration.name, choice[declaration.name])
+            parent_side, child_side = _closure_frames(model, declaration, names)
+            sites.append(_site(declaration.name, declaration.kind, "closure", choice[declaration.name], parent_side, child_side, None))
+        else:
+            frame_a, frame_b = _closure_frames(model, declaration, (f"{declaration.name}_parent", f"{declaration.name}_child"))
+            closures.append(Closure(declaration.name, declaration.kind, frame_a, frame_b))
+    for name in free_joints:
+        free_id = model.getJointId(name)
+        align = pin.SE3(rotation_z_to(description.joints[name].axis), np.zeros(3))
+        names = _element_names(name, choice[name])
+        parent_side = _add_frame(model, names[0], model.parents[free_id], model.jointPlacements[free_id] * align)
+        child_side = _add_frame(model, names[1], free_id, align)
+        sites.append(_site(name, "revolute", "joint", choice[name], parent_side, child_side, name))
+    return closures, sites
+
+
+def _actuators(model: pin.Model, description: MechanismDescription) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Coordinate and velocity indices of the actuated joints, and their stroke limits."""
+    q_index, v_index, lower, upper = [], [], [], []
+    for name in description.actuated_joints:
+        joint_id = model.getJointId(name)
+        if model.nqs[joint_id] != 1 or model.nvs[joint_id] != 1:
+            raise MechanismFileError(
+                f"actuated joint {name!r} is a {description.joints[name].kind} joint stored by Pinocchio with "
+                f"nq = {model.nqs[joint_id]} (cos, sin): a driving constraint needs one coordinate; declare it "
+                "'revolute' with wide limits (e.g. lower=\"-1e4\" upper=\"1e4\") to prescribe its angle"
+            )
+        q_index.append(model.idx_qs[joint_id])
+        v_index.append(model.idx_vs[joint_id])
+        declaration = description.joints[name]
+        lower.append(-np.inf if declaration.lower is None else declaration.lower)
+        upper.append(np.inf if declaration.upper is None else declaration.upper)
+    return np.array(q_index, dtype=int), np.array(v_index, dtype=int), np.array(lower), np.array(upper)
+
+
 def build_mechanism(
     source: str | Path | MechanismDescription,
     clearance: Sequence[str] | Mapping[str, str] | str | None = None,
@@ -222,74 +305,10 @@ def build_mechanism(
     """
     description = source if isinstance(source, MechanismDescription) else parse_mechanism(source)
     choice = _normalise_choice(clearance)
-    closure_by_name = {c.name: c for c in description.closures}
-    free_joints = []
-    for name in choice:
-        if name in closure_by_name:
-            continue
-        joint = description.joints.get(name)
-        if joint is None:
-            valid = sorted([n for n, j in description.joints.items() if j.kind in ("revolute", "continuous")] + list(closure_by_name))
-            raise ClearanceChoiceError(
-                f"clearance joint {name!r} is neither a joint nor a closure of {description.name!r}; "
-                f"joints that can carry clearance: {', '.join(valid)}"
-            )
-        if joint.kind not in ("revolute", "continuous"):
-            raise ClearanceChoiceError(
-                f"clearance joint {name!r} is a {joint.kind} joint; clearance is modelled for revolute joints "
-                "and spherical or revolute closures"
-            )
-        if name in description.actuated_joints:
-            raise ClearanceChoiceError(f"clearance joint {name!r} is actuated; an actuated joint cannot carry clearance")
-        free_joints.append(name)
-    urdf_text = _free_joint_urdf(description, free_joints)
-    try:
-        model = pin.buildModelFromXML(urdf_text)
-    except (RuntimeError, ValueError) as exc:
-        raise MechanismFileError(f"Pinocchio could not build the model of {description.name!r}: {exc}") from None
-    try:
-        visual_model = pin.buildGeomFromUrdfString(model, urdf_text, pin.GeometryType.VISUAL)
-        collision_model = pin.buildGeomFromUrdfString(model, urdf_text, pin.GeometryType.COLLISION)
-    except (RuntimeError, ValueError) as exc:
-        raise MechanismFileError(f"geometry of {description.name!r} could not be built: {exc}") from None
-
-    closures = []
-    sites = []
-    for declaration in description.closures:
-        if declaration.name in choice:
-            outer_on = choice[declaration.name]
-            names = _element_names(declaration.name, outer_on)
-            parent_side, child_side = _closure_frames(model, declaration, names)
-            outer, inner = (child_side, parent_side) if outer_on == "child" else (parent_side, child_side)
-            sites.append(ClearanceSite(declaration.name, declaration.kind, "closure", outer, inner, outer_on, None))
-        else:
-            frame_a, frame_b = _closure_frames(model, declaration, (f"{declaration.name}_parent", f"{declaration.name}_child"))
-            closures.append(Closure(declaration.name, declaration.kind, frame_a, frame_b))
-    for name in free_joints:
-        joint = description.joints[name]
-        free_id = model.getJointId(name)
-        align = pin.SE3(rotation_z_to(joint.axis), np.zeros(3))
-        outer_on = choice[name]
-        names = _element_names(name, outer_on)
-        parent_side = _add_frame(model, names[0], model.parents[free_id], model.jointPlacements[free_id] * align)
-        child_side = _add_frame(model, names[1], free_id, align)
-        outer, inner = (child_side, parent_side) if outer_on == "child" else (parent_side, child_side)
-        sites.append(ClearanceSite(name, "revolute", "joint", outer, inner, outer_on, name))
-
-    q_index, v_index, lower, upper = [], [], [], []
-    for name in description.actuated_joints:
-        joint_id = model.getJointId(name)
-        if model.nqs[joint_id] != 1 or model.nvs[joint_id] != 1:
-            raise MechanismFileError(
-                f"actuated joint {name!r} is a {description.joints[name].kind} joint stored by Pinocchio with "
-                f"nq = {model.nqs[joint_id]} (cos, sin): a driving constraint needs one coordinate; declare it "
-                "'revolute' with wide limits (e.g. lower=\"-1e4\" upper=\"1e4\") to prescribe its angle"
-            )
-        q_index.append(model.idx_qs[joint_id])
-        v_index.append(model.idx_vs[joint_id])
-        declaration = description.joints[name]
-        lower.append(-np.inf if declaration.lower is None else declaration.lower)
-        upper.append(np.inf if declaration.upper is None else declaration.upper)
+    free_joints = _clearance_tree_joints(description, choice)
+    model, visual_model, collision_model = _pinocchio_models(description, _free_joint_urdf(description, free_joints))
+    closures, sites = _closures_and_sites(model, description, choice, free_joints)
+    q_index, v_index, lower, upper = _actuators(model, description)
     free_flyers = tuple(
         (model.idx_qs[j], model.idx_vs[j]) for j in range(1, model.njoints) if model.joints[j].shortname() == "JointModelFreeFlyer"
     )
@@ -301,9 +320,9 @@ def build_mechanism(
         closures=tuple(closures),
         clearance_sites=tuple(sites),
         actuated_joints=description.actuated_joints,
-        actuator_q_index=np.array(q_index, dtype=int),
-        actuator_v_index=np.array(v_index, dtype=int),
-        stroke_lower=np.array(lower),
-        stroke_upper=np.array(upper),
+        actuator_q_index=q_index,
+        actuator_v_index=v_index,
+        stroke_lower=lower,
+        stroke_upper=upper,
         free_flyers=free_flyers,
     )
