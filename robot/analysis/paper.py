@@ -11,8 +11,10 @@ periods by default) and writes figures corresponding to the paper's
   ideal against clearance;
 
 and ``summary.json``: peak contact force per joint, peak driving forces, the
-duration of the initial transient and the RMS deviation of the end-effector
-acceleration from the ideal case.
+duration of the initial transient, the RMS deviation of the end-effector
+acceleration from the ideal case, and the paper's five claims measured with
+their verdicts (``claims``, also written as ``claims.md``:
+:mod:`robot.analysis.claims`).
 
 **Initial transient** (our definition, the paper gives none): the last time at
 which the normal force of a clearance joint exceeds ``TRANSIENT_FACTOR`` times
@@ -29,6 +31,7 @@ from typing import Callable
 
 import numpy as np
 
+from robot.analysis.claims import claims_json, claims_report, evaluate_claims
 from robot.io.atomic import atomic_write, atomic_write_text
 from robot.io.results import SimulationResult, load_result, save_result
 
@@ -205,5 +208,9 @@ def write_outputs(results: dict[str, SimulationResult], out: Path) -> list[Path]
         figure_8(results, out / "figure8_forces.png"),
         figure_9(results, out / "figure9_end_effector.png"),
     ]
-    written.append(atomic_write_text(out / "summary.json", json.dumps(summary(results), indent=2)))
+    numbers = summary(results)
+    claims = evaluate_claims(results, numbers["period_s"])
+    numbers["claims"] = claims_json(claims)
+    written.append(atomic_write_text(out / "claims.md", claims_report(claims)))
+    written.append(atomic_write_text(out / "summary.json", json.dumps(numbers, indent=2)))
     return written
