@@ -11,7 +11,7 @@ import math
 
 import numpy as np
 
-from ..errors import RobotError
+from robot.errors import RobotError
 
 
 class AnalysisError(RobotError, ValueError):
