@@ -168,6 +168,16 @@ def _closure_frames(model: pin.Model, declaration: ClosureDeclaration, names: tu
     return _add_frame(model, names[0], joint_a, placement_a), _add_frame(model, names[1], joint_b, placement_b)
 
 
+def _gravity_vector(gravity: Sequence[float]) -> np.ndarray:
+    try:
+        vector = np.asarray(gravity, dtype=float)
+    except (TypeError, ValueError):
+        vector = np.full(1, np.nan)
+    if vector.shape != (3,) or not np.all(np.isfinite(vector)):
+        raise MechanismFileError(f"gravity={gravity!r} must be three finite numbers [gx, gy, gz] in m/s^2 (world axes)")
+    return vector
+
+
 def _element_names(site: str, outer_on: str) -> tuple[str, str]:
     """Frame names (parent side, child side) of a clearance site's two elements."""
     return (f"{site}_inner", f"{site}_outer") if outer_on == "child" else (f"{site}_outer", f"{site}_inner")
@@ -204,9 +214,13 @@ def _free_joint_urdf(description: MechanismDescription, joint_names: Sequence[st
     return ET.tostring(root, encoding="unicode")
 
 
+STANDARD_GRAVITY = (0.0, 0.0, -9.81)
+
+
 def build_mechanism(
     source: str | Path | MechanismDescription,
     clearance: Sequence[str] | Mapping[str, str] | str | None = None,
+    gravity: Sequence[float] = STANDARD_GRAVITY,
 ) -> Mechanism:
     """Load a URDF with closure declarations into a :class:`Mechanism`.
 
@@ -219,6 +233,10 @@ def build_mechanism(
         ``"R1,S1"``), or a mapping name -> ``outer_on`` (``"child"`` or
         ``"parent"``: which body carries the socket/bearing). Revolute tree
         joints and spherical or revolute closures can carry clearance.
+    gravity:
+        Gravitational acceleration in world axes (m/s^2), set as the Pinocchio
+        model's ``gravity`` (used by ``nonLinearEffects``, RNEA and the potential
+        energy). Default ``[0, 0, -9.81]``.
     """
     description = source if isinstance(source, MechanismDescription) else parse_mechanism(source)
     choice = _normalise_choice(clearance)
@@ -247,6 +265,7 @@ def build_mechanism(
         model = pin.buildModelFromXML(urdf_text)
     except (RuntimeError, ValueError) as exc:
         raise MechanismFileError(f"Pinocchio could not build the model of {description.name!r}: {exc}") from None
+    model.gravity = pin.Motion(_gravity_vector(gravity), np.zeros(3))
     try:
         visual_model = pin.buildGeomFromUrdfString(model, urdf_text, pin.GeometryType.VISUAL)
         collision_model = pin.buildGeomFromUrdfString(model, urdf_text, pin.GeometryType.COLLISION)
