@@ -40,7 +40,7 @@ from clearance_contact import ContactError, SphericalClearanceJoint
 
 from robot.dynamics.baumgarte import Baumgarte
 from robot.model import constraints as C
-from robot.dynamics import redundancy as R
+from robot.model import redundancy as R
 from robot.dynamics import rhs_kernels as K
 from robot.model.mechanism import ClearanceSite, Mechanism
 
@@ -135,7 +135,7 @@ class DynamicsWorkspace:
     drive: Callable | None = None  # the drive through its interpolation table (see DriveTable)
     zero_tau: np.ndarray = field(default_factory=lambda: np.zeros(0))
     compiled: "CompiledTerms | None" = None  # the compiled right-hand side's views, when it applies
-    rows: R.RowSelection | None = None  # the rows the KKT solve uses (robot.dynamics.redundancy), set on first solve
+    rows: R.RowSelection | None = None  # the rows the KKT solve uses (robot.model.redundancy), set on first solve
     rank_checks: int = 0  # redundancy detections after the first (a dropped row's check failed)
 
 
@@ -447,7 +447,7 @@ def solve_kkt(dynamics: DynamicsModel, workspace: DynamicsWorkspace, tau: np.nda
 
     ``data.lambda_c`` then holds Pinocchio's multipliers of those rows (the driving ones
     from ``workspace.rows.n_closure_kept``). The rows are detected on the first call and
-    again when a dropped row's equation is not met (:mod:`robot.dynamics.redundancy`);
+    again when a dropped row's equation is not met (:mod:`robot.model.redundancy`);
     without redundant rows this is ``forwardDynamics`` on every row. Needs the joint
     Jacobians and frame placements of the current state on the workspace's data.
     Returns Pinocchio's ``data.ddq`` (overwritten by the next solve).

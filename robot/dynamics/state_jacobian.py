@@ -117,7 +117,7 @@ class StateJacobian:
         # the right-hand side at (t, y) leaves Phi_q, the frame Jacobians and qdd in the data (and M,
         # which computeRNEADerivatives writes again, the same values, before it is factorised)
         qdd = D.state_derivative(dynamics, workspace, t, y, onset_rates)[nq : nq + nv]
-        # the KKT system the right-hand side solved: its independent rows (robot.dynamics.redundancy)
+        # the KKT system the right-hand side solved: its independent rows (robot.model.redundancy)
         rows = workspace.rows
         first = rows.n_closure_kept
         driving_multipliers = data.lambda_c[first:].copy()
