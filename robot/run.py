@@ -85,7 +85,7 @@ def build_run(scene: Scene | str | Path, **overrides) -> Run:
     else:
         q_guess = pin.neutral(mechanism.model)
     misalignment = {joint: misalignment_rotation(angle) for joint, angle in scene.misalignment_deg.items()}
-    y0 = initial_state(mechanism, q_guess, drive.drive(0.0), misalignment)
+    y0 = initial_state(mechanism, q_guess, drive.drive(0.0), misalignment, scene.initial_positions, scene.initial_velocities)
     return Run(scene, mechanism, dynamics, y0, layout)
 
 

@@ -307,13 +307,13 @@ class DriveTable:
         samples = np.array([np.concatenate(drive.drive(middle + half * x)) for x in self.nodes])
         m = samples.shape[1] // 3
         coefficients = np.linalg.solve(np.vander(self.nodes, self.degree + 1, increasing=True), samples)
-        scale = np.abs(samples).reshape(len(self.nodes), 3, m).max(axis=(0, 2))
+        scale = np.abs(samples).reshape(len(self.nodes), 3, m).max(axis=(0, 2), initial=0.0)  # m = 0: no actuator
         ok = True
         for x in self.check_points:
             exact = np.concatenate(drive.drive(middle + half * x))
             fitted = np.empty(3 * m)
             K.power_series(coefficients, x, fitted)
-            error = np.abs(fitted - exact).reshape(3, m).max(axis=1)
+            error = np.abs(fitted - exact).reshape(3, m).max(axis=1, initial=0.0)
             if not np.all(error <= self.rtol * np.maximum(scale, 1e-300)):
                 ok = False
                 break
