@@ -17,6 +17,11 @@ system in C++ with its own signs: ``M qdd + h = tau + J^T lambda_pin`` and
 ``J qdd = -drift``. Hence ``drift = -(gamma - 2 alpha Phid - beta^2 Phi)`` and
 ``lambda = -lambda_pin`` in the paper's convention.
 
+**Redundant rows** (overconstrained mechanisms): the system is solved on the
+independent rows of ``Phi_q`` (:func:`solve_kkt`, :mod:`robot.model.redundancy`),
+exact for a consistent system; the reported multipliers are the minimum-norm
+ones, the driving forces unique.
+
 **Driving force sign.** The driving row of actuator k is the unit row of its
 prismatic coordinate (the leg length), so the actuator's generalized force is
 ``-lambda_k = lambda_pin_k``: ``driving_force > 0`` means the actuator pushes
@@ -173,7 +178,8 @@ class CompiledTerms:
 
     Applies when every closure is spherical (rows ``p_a - p_b`` first, then the
     drivers); otherwise :func:`for_dynamics` returns None and
-    :func:`state_derivative` takes the Python path. A contact law with a
+    :func:`state_derivative` takes the Python path. Redundant rows are handled
+    after the kernels: they write every row, :func:`solve_kkt` uses the independent ones. A contact law with a
     compiled ``kernel`` (``clearance_contact``'s laws) is evaluated inside the
     compiled code; any other law through its ``evaluate``.
     """
