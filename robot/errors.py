@@ -48,3 +48,24 @@ class SceneError(RobotError, ValueError):
 
 class ResultFileError(RobotError, ValueError):
     """A result file is missing, malformed or from another mechanism."""
+
+
+class InitialStateError(KinematicsError, ValueError):
+    """The initial positions or velocities a scene asks for cannot be met by the mechanism."""
+
+
+class RobotWarning(UserWarning):
+    """Base class of the warnings issued by the ``robot`` package."""
+
+
+class RedundantConstraintWarning(RobotWarning):
+    """Some constraint equations are linearly dependent on the others (an overconstrained mechanism).
+
+    The motion is exact (solved on the independent equations); the multipliers of
+    the redundant set are not unique and are reported by a convention
+    (``docs/dynamics.md``, "Redundant constraints").
+    """
+
+
+class InitialStateWarning(RobotWarning):
+    """A given initial coordinate had to be corrected to satisfy the constraints."""

@@ -73,7 +73,7 @@ def build_run(scene: Scene | str | Path, **overrides) -> Run:
     """Build the mechanism with exactly the scene's clearance joints, its dynamics and initial state."""
     if not isinstance(scene, Scene):
         scene = load_scene(scene, **overrides)
-    mechanism = build_mechanism(scene.mechanism_path, {c.joint: c.outer_on for c in scene.clearances})
+    mechanism = build_mechanism(scene.mechanism_path, {c.joint: c.outer_on for c in scene.clearances}, scene.gravity)
     drive, layout = make_drive(scene, mechanism)
     if not mechanism.model.existFrame(scene.end_effector):
         raise SceneError(f"scene {scene.name}: end_effector={scene.end_effector!r} is not a frame of the mechanism")
@@ -86,7 +86,7 @@ def build_run(scene: Scene | str | Path, **overrides) -> Run:
     else:
         q_guess = pin.neutral(mechanism.model)
     misalignment = {joint: misalignment_rotation(angle) for joint, angle in scene.misalignment_deg.items()}
-    y0 = initial_state(mechanism, q_guess, drive.drive(0.0), misalignment)
+    y0 = initial_state(mechanism, q_guess, drive.drive(0.0), misalignment, scene.initial_positions, scene.initial_velocities)
     return Run(scene, mechanism, dynamics, y0, layout)
 
 

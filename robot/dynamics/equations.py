@@ -17,6 +17,11 @@ system in C++ with its own signs: ``M qdd + h = tau + J^T lambda_pin`` and
 ``J qdd = -drift``. Hence ``drift = -(gamma - 2 alpha Phid - beta^2 Phi)`` and
 ``lambda = -lambda_pin`` in the paper's convention.
 
+**Redundant rows** (overconstrained mechanisms): the system is solved on the
+independent rows of ``Phi_q`` (:func:`solve_kkt`, :mod:`robot.model.redundancy`),
+exact for a consistent system; the reported multipliers are the minimum-norm
+ones, the driving forces unique.
+
 **Driving force sign.** The driving row of actuator k is the unit row of its
 prismatic coordinate (the leg length), so the actuator's generalized force is
 ``-lambda_k = lambda_pin_k``: ``driving_force > 0`` means the actuator pushes
@@ -40,6 +45,7 @@ from clearance_contact import ContactError, SphericalClearanceJoint
 
 from robot.dynamics.baumgarte import Baumgarte
 from robot.model import constraints as C
+from robot.model import redundancy as R
 from robot.dynamics import rhs_kernels as K
 from robot.model.mechanism import ClearanceSite, Mechanism
 
@@ -134,6 +140,8 @@ class DynamicsWorkspace:
     drive: Callable | None = None  # the drive through its interpolation table (see DriveTable)
     zero_tau: np.ndarray = field(default_factory=lambda: np.zeros(0))
     compiled: "CompiledTerms | None" = None  # the compiled right-hand side's views, when it applies
+    rows: R.RowSelection | None = None  # the rows the KKT solve uses (robot.model.redundancy), set on first solve
+    rank_checks: int = 0  # redundancy detections after the first (a dropped row's check failed)
 
 
 def make_workspace(dynamics: DynamicsModel) -> DynamicsWorkspace:
@@ -170,7 +178,8 @@ class CompiledTerms:
 
     Applies when every closure is spherical (rows ``p_a - p_b`` first, then the
     drivers); otherwise :func:`for_dynamics` returns None and
-    :func:`state_derivative` takes the Python path. A contact law with a
+    :func:`state_derivative` takes the Python path. Redundant rows are handled
+    after the kernels: they write every row, :func:`solve_kkt` uses the independent ones. A contact law with a
     compiled ``kernel`` (``clearance_contact``'s laws) is evaluated inside the
     compiled code; any other law through its ``evaluate``.
     """
@@ -304,13 +313,13 @@ class DriveTable:
         samples = np.array([np.concatenate(drive.drive(middle + half * x)) for x in self.nodes])
         m = samples.shape[1] // 3
         coefficients = np.linalg.solve(np.vander(self.nodes, self.degree + 1, increasing=True), samples)
-        scale = np.abs(samples).reshape(len(self.nodes), 3, m).max(axis=(0, 2))
+        scale = np.abs(samples).reshape(len(self.nodes), 3, m).max(axis=(0, 2), initial=0.0)  # m = 0: no actuator
         ok = True
         for x in self.check_points:
             exact = np.concatenate(drive.drive(middle + half * x))
             fitted = np.empty(3 * m)
             K.power_series(coefficients, x, fitted)
-            error = np.abs(fitted - exact).reshape(3, m).max(axis=1)
+            error = np.abs(fitted - exact).reshape(3, m).max(axis=1, initial=0.0)
             if not np.all(error <= self.rtol * np.maximum(scale, 1e-300)):
                 ok = False
                 break
@@ -435,8 +444,35 @@ def evaluate(
         contacts.append(result)
         if np.any(result.in_contact):
             views.add_generalized_force(model, data, result, tau)
-    qdd = pin.forwardDynamics(model, data, tau, phi_q, -rhs).copy()
-    return Evaluation(qdd, -data.lambda_c.copy(), phi, phi_dot, contacts, tau)
+    qdd = solve_kkt(dynamics, workspace, tau, phi_q, -rhs).copy()
+    return Evaluation(qdd, -workspace.rows.full_multipliers(phi_q, data.lambda_c), phi, phi_dot, contacts, tau)
+
+
+def solve_kkt(dynamics: DynamicsModel, workspace: DynamicsWorkspace, tau: np.ndarray, phi_q: np.ndarray, drift: np.ndarray) -> np.ndarray:
+    """qdd of the KKT system (paper eq. (24), Pinocchio's signs) on the workspace's independent rows.
+
+    ``data.lambda_c`` then holds Pinocchio's multipliers of those rows (the driving ones
+    from ``workspace.rows.n_closure_kept``). The rows are detected on the first call and
+    again when a dropped row's equation is not met (:mod:`robot.model.redundancy`);
+    without redundant rows this is ``forwardDynamics`` on every row. Needs the joint
+    Jacobians and frame placements of the current state on the workspace's data.
+    Returns Pinocchio's ``data.ddq`` (overwritten by the next solve).
+    """
+    model, data = dynamics.mechanism.model, workspace.data
+    rows = workspace.rows
+    if rows is None:
+        rows = workspace.rows = R.detect(dynamics.constraints, model, data, phi_q)
+    if rows.full:
+        return pin.forwardDynamics(model, data, tau, phi_q, drift)
+    qdd = pin.forwardDynamics(model, data, tau, phi_q[rows.independent], drift[rows.independent])
+    if not rows.consistent(phi_q, drift, qdd):
+        workspace.rank_checks += 1
+        fresh = R.detect(dynamics.constraints, model, data, phi_q)
+        if not fresh.same_rows(rows):
+            workspace.rows = fresh
+            independent = fresh.independent
+            qdd = pin.forwardDynamics(model, data, tau, phi_q if fresh.full else phi_q[independent], drift if fresh.full else drift[independent])
+    return qdd
 
 
 def state_derivative(
@@ -487,10 +523,10 @@ def state_derivative(
                     tau = np.zeros(nv)
                 views.add_generalized_force(model, data, result, tau)
     out = np.empty(nq + nv + 2)
-    out[nq : nq + nv] = pin.forwardDynamics(model, data, workspace.zero_tau if tau is None else tau, kernel.phi_q, drift)
+    out[nq : nq + nv] = solve_kkt(dynamics, workspace, workspace.zero_tau if tau is None else tau, kernel.phi_q, drift)
     out[:nq] = pin.tangentMapProduct(model, q, v[:, None])
     # actuator power: driving force (= Pinocchio's multiplier of the driving row) times the actuator rate
-    out[nq + nv] = data.lambda_c[kernel.n_closure_rows :] @ v[mechanism.actuator_v_index] if kernel.driven else 0.0
+    out[nq + nv] = data.lambda_c[workspace.rows.n_closure_kept :] @ v[mechanism.actuator_v_index] if kernel.driven else 0.0
     out[nq + nv + 1] = 0.0 if tau is None else tau @ v
     return out
 
@@ -536,10 +572,10 @@ def _compiled_state_derivative(
     tau[:] = 0.0
     _compiled_sites(dynamics, workspace, compiled, t, v, onset_rates, tau)
     out = np.empty(nq + nv + 2)
-    out[nq : nq + nv] = pin.forwardDynamics(model, data, tau, compiled.phi_q, compiled.drift)
+    out[nq : nq + nv] = solve_kkt(dynamics, workspace, tau, compiled.phi_q, compiled.drift)
     out[:nq] = pin.tangentMapProduct(model, q, v[:, None])
     # actuator power: driving force (= Pinocchio's multiplier of the driving row) times the actuator rate
-    K.write_powers(data.lambda_c, compiled.n_closure_rows, v, compiled.actuator_v, tau, out, nq + nv)
+    K.write_powers(data.lambda_c, workspace.rows.n_closure_kept, v, compiled.actuator_v, tau, out, nq + nv)
     return out
 
 

@@ -117,10 +117,12 @@ class StateJacobian:
         # the right-hand side at (t, y) leaves Phi_q, the frame Jacobians and qdd in the data (and M,
         # which computeRNEADerivatives writes again, the same values, before it is factorised)
         qdd = D.state_derivative(dynamics, workspace, t, y, onset_rates)[nq : nq + nv]
-        first = self.compiled.n_closure_rows
+        # the KKT system the right-hand side solved: its independent rows (robot.model.redundancy)
+        rows = workspace.rows
+        first = rows.n_closure_kept
         driving_multipliers = data.lambda_c[first:].copy()
         q, v = pin.normalize(model, y[:nq]), y[nq : nq + nv]
-        phi_q = self.compiled.phi_q
+        phi_q = self.compiled.phi_q if rows.full else self.compiled.phi_q[rows.independent]
         dtau_c_dxi, dtau_c_dv = self.contact_stiffness(t, onset_rates)
         drnea_dq, drnea_dv, _ = pin.computeRNEADerivatives(model, data, q, v, qdd)
         # M^-1 [Phi_q^T, F_xi, F_v] with one Cholesky factorisation (crba filled M's upper triangle)

@@ -71,6 +71,18 @@ class ConstraintSet:
     def driving_rows(self) -> slice:
         return slice(self.n_closure_rows, self.n_rows)
 
+    @cached_property
+    def row_labels(self) -> tuple[str, ...]:
+        """One name per row of Phi: ``CLOSURE:x|y|z`` (world axes), ``CLOSURE:rot_x|rot_y`` (the revolute
+        axis rows along frame b's x and y axes), ``JOINT:drive``."""
+        labels = []
+        for rows in self.closures:
+            components = ("x", "y", "z", "rot_x", "rot_y")[: rows.closure.n_equations]
+            labels += [f"{rows.closure.name}:{component}" for component in components]
+        if self.driven:
+            labels += [f"{joint}:drive" for joint in self.mechanism.actuated_joints]
+        return tuple(labels)
+
 
 def constraint_set(
     mechanism: Mechanism,

@@ -168,6 +168,21 @@ def _closure_frames(model: pin.Model, declaration: ClosureDeclaration, names: tu
     return _add_frame(model, names[0], joint_a, placement_a), _add_frame(model, names[1], joint_b, placement_b)
 
 
+STANDARD_GRAVITY = (0.0, 0.0, -9.81)
+
+
+def _gravity_vector(gravity: Sequence[float]) -> np.ndarray:
+    try:
+        vector = np.asarray(gravity, dtype=float)
+    except (TypeError, ValueError):
+        vector = np.full(1, np.nan)
+    if vector.shape != (3,) or not np.all(np.isfinite(vector)):
+        raise MechanismFileError(
+            f"gravity={gravity!r} must be three finite numbers [gx, gy, gz] in m/s^2 (world axes)", key="gravity", value=gravity
+        )
+    return vector
+
+
 def _element_names(site: str, outer_on: str) -> tuple[str, str]:
     """Frame names (parent side, child side) of a clearance site's two elements."""
     return (f"{site}_inner", f"{site}_outer") if outer_on == "child" else (f"{site}_outer", f"{site}_inner")
@@ -229,11 +244,14 @@ def _clearance_tree_joints(description: MechanismDescription, choice: Mapping[st
     return free_joints
 
 
-def _pinocchio_models(description: MechanismDescription, urdf_text: str) -> tuple[pin.Model, pin.GeometryModel, pin.GeometryModel]:
+def _pinocchio_models(
+    description: MechanismDescription, urdf_text: str, gravity: Sequence[float]
+) -> tuple[pin.Model, pin.GeometryModel, pin.GeometryModel]:
     try:
         model = pin.buildModelFromXML(urdf_text)
     except (RuntimeError, ValueError) as exc:
         raise MechanismFileError(f"Pinocchio could not build the model of {description.name!r}: {exc}") from None
+    model.gravity = pin.Motion(_gravity_vector(gravity), np.zeros(3))
     try:
         visual_model = pin.buildGeomFromUrdfString(model, urdf_text, pin.GeometryType.VISUAL)
         collision_model = pin.buildGeomFromUrdfString(model, urdf_text, pin.GeometryType.COLLISION)
@@ -290,6 +308,7 @@ def _actuators(model: pin.Model, description: MechanismDescription) -> tuple[np.
 def build_mechanism(
     source: str | Path | MechanismDescription,
     clearance: Sequence[str] | Mapping[str, str] | str | None = None,
+    gravity: Sequence[float] = STANDARD_GRAVITY,
 ) -> Mechanism:
     """Load a URDF with closure declarations into a :class:`Mechanism`.
 
@@ -302,11 +321,15 @@ def build_mechanism(
         ``"R1,S1"``), or a mapping name -> ``outer_on`` (``"child"`` or
         ``"parent"``: which body carries the socket/bearing). Revolute tree
         joints and spherical or revolute closures can carry clearance.
+    gravity:
+        Gravitational acceleration in world axes (m/s^2), set as the Pinocchio
+        model's ``gravity`` (used by ``nonLinearEffects``, RNEA and the potential
+        energy). Default ``[0, 0, -9.81]``.
     """
     description = source if isinstance(source, MechanismDescription) else parse_mechanism(source)
     choice = _normalise_choice(clearance)
     free_joints = _clearance_tree_joints(description, choice)
-    model, visual_model, collision_model = _pinocchio_models(description, _free_joint_urdf(description, free_joints))
+    model, visual_model, collision_model = _pinocchio_models(description, _free_joint_urdf(description, free_joints), gravity)
     closures, sites = _closures_and_sites(model, description, choice, free_joints)
     q_index, v_index, lower, upper = _actuators(model, description)
     free_flyers = tuple(

@@ -15,7 +15,8 @@ Mobility is reported twice:
   (:func:`robot.model.kinematics.mobility`), with the actuators free (closures only) and
   driven (closures plus one driving row per actuator). It differs from the count
   when equations are redundant (overconstrained mechanisms) or at singular
-  configurations.
+  configurations. The redundant closure equations are listed by name
+  (:func:`robot.model.redundancy.detect`, e.g. ``K:z, K:rot_x, K:rot_y``).
 
 The configuration: for a UPS/RPS platform (:class:`~robot.model.platform_kinematics.PlatformLayout`)
 the inverse kinematics of the home pose ``[x0, z0, 0, 0, 0]`` (``x0, z0`` from
@@ -35,6 +36,7 @@ import pinocchio as pin
 
 from robot.model import constraints as C
 from robot.model import kinematics as K
+from robot.model import redundancy as R
 from robot.errors import KinematicsError
 from robot.model.mechanism import Mechanism
 
@@ -134,6 +136,7 @@ class MechanismSummary:
     rank_driven: int | None
     mobility_free: int | None
     mobility_driven: int | None
+    redundant_equations: tuple[str, ...] | None  # closure rows dependent on the others (robot.model.redundancy)
     moving_mass: float
     fixed_mass: float
 
@@ -223,7 +226,7 @@ def summarize(mechanism: Mechanism, q: np.ndarray | None = None) -> MechanismSum
         for s in mechanism.clearance_sites
     )
     grubler_free, grubler_driven = grubler_kutzbach(mechanism)
-    residual = rank_free = rank_driven = mobility_free = mobility_driven = None
+    residual = rank_free = rank_driven = mobility_free = mobility_driven = redundant = None
     if q is None:
         try:
             guess, configuration = reference_configuration(mechanism)
@@ -241,6 +244,7 @@ def summarize(mechanism: Mechanism, q: np.ndarray | None = None) -> MechanismSum
         mobility_free = K.mobility(C.constraint_set(mechanism, driven=False), q)
         mobility_driven = K.mobility(C.constraint_set(mechanism, driven=True), q)
         rank_free, rank_driven = model.nv - mobility_free, model.nv - mobility_driven
+        redundant = _redundant_equations(mechanism, q)
     moving_mass = float(sum(inertia.mass for inertia in model.inertias[1:]))
     return MechanismSummary(
         name=mechanism.name,
@@ -262,9 +266,18 @@ def summarize(mechanism: Mechanism, q: np.ndarray | None = None) -> MechanismSum
         rank_driven=rank_driven,
         mobility_free=mobility_free,
         mobility_driven=mobility_driven,
+        redundant_equations=redundant,
         moving_mass=moving_mass,
         fixed_mass=float(model.inertias[0].mass),
     )
+
+
+def _redundant_equations(mechanism: Mechanism, q: np.ndarray) -> tuple[str, ...]:
+    """Names of the closure equations that depend on the others at q (actuators free)."""
+    constraints = C.constraint_set(mechanism, driven=False)
+    data = mechanism.model.createData()
+    K.update_kinematics(mechanism.model, data, q)
+    return R.detect(constraints, mechanism.model, data, C.jacobian(constraints, mechanism.model, data), warn=False).labels
 
 
 def render(summary: MechanismSummary) -> str:
@@ -324,6 +337,11 @@ def render(summary: MechanismSummary) -> str:
         )
         residual = "" if s.assembly_residual is None else f"; closure residual {s.assembly_residual:.1e} m"
         lines.append(f"  at: {s.configuration}{residual}")
+        redundant = ", ".join(s.redundant_equations) or "none"
+        lines.append(
+            f"Redundant closure equations (dependent on the others, relative tolerance {R.REDUNDANCY_TOLERANCE:.0e}): "
+            f"{len(s.redundant_equations)}: {redundant}"
+        )
     lines.append(f"Total mass: {s.total_mass:.6g} kg (moving {s.moving_mass:.6g} kg, fixed to the ground {s.fixed_mass:.6g} kg)")
     return "\n".join(lines) + "\n"
 

@@ -93,7 +93,7 @@ class JointTrajectory:
 
     def drive(self, t: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         omega = 2.0 * math.pi / self.period
-        values = np.array([c.evaluate(t, omega) for c in self.coordinates])
+        values = np.array([c.evaluate(t, omega) for c in self.coordinates], dtype=float).reshape(-1, 3)  # (0, 3): no actuator
         return values[:, 0], values[:, 1], values[:, 2]
 
 

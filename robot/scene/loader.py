@@ -19,6 +19,7 @@ Schema (defaults in brackets)::
     mechanism = "../../urdf/ups_rps.urdf"  # path relative to this file
     end_effector = "platform"            # frame whose motion is reported
     duration = 2.0                       # s
+    gravity = [0.0, 0.0, -9.81]          # m/s^2, world axes [default]
 
     [trajectory]
     type = "platform"                    # "platform" (pose through IK) or "joints"
@@ -48,6 +49,9 @@ Schema (defaults in brackets)::
     [initial]
     misalignment_deg = { R1 = -0.035 }   # revolute clearance joints: bearing rotated about its
                                          # local x axis at t = 0 (degrees, right-hand rule)
+    positions = { crank_rod = -1.4 }     # 1-DOF tree joints: coordinate at t = 0 (rad or m); held
+                                         # when independent, else a guess (robot.model.initial_state)
+    velocities = { crank_rod = 0.0 }     # their rates at t = 0 (rad/s or m/s), projected onto the constraints
 """
 
 from __future__ import annotations
@@ -79,7 +83,7 @@ from robot.integration.solvers import FIXED_STEP_METHODS, METHODS
 
 SCENE_DIR = Path(__file__).resolve().parent / "scenes"
 
-_TOP_KEYS = {"name", "description", "mechanism", "end_effector", "duration", "trajectory", "solver", "baumgarte", "limits", "materials", "clearance", "initial", "extends"}
+_TOP_KEYS = {"name", "description", "mechanism", "end_effector", "duration", "gravity", "trajectory", "solver", "baumgarte", "limits", "materials", "clearance", "initial", "extends"}
 _SOLVER_KEYS = {"method", "rtol", "atol", "max_step", "first_step", "jacobian"}
 _BAUMGARTE_KEYS = {"alpha", "beta"}
 _LIMIT_KEYS = {"penetration_ratio", "max_residual", "min_step", "max_wall_time"}
@@ -128,6 +132,9 @@ class Scene:
     limits: FailureLimits
     clearances: tuple[ClearanceSpec, ...] = field(default_factory=tuple)
     misalignment_deg: dict[str, float] = field(default_factory=dict)
+    gravity: tuple[float, float, float] = (0.0, 0.0, -9.81)
+    initial_positions: dict[str, float] = field(default_factory=dict)
+    initial_velocities: dict[str, float] = field(default_factory=dict)
     #: the scene's TOML document as resolved (``extends`` merged, overrides applied)
     document: dict[str, Any] = field(default_factory=dict, compare=False, repr=False)
     #: the folder that relative paths of the document are relative to
@@ -412,7 +419,7 @@ def scene_from_document(data: dict[str, Any], path: Path, base_dir: Path) -> Sce
     if len(set(joints)) != len(joints):
         raise SceneError(f"{where}: a joint carries two clearance definitions: {joints}")
     initial = _table(data, "initial", where)
-    _unknown(initial, {"misalignment_deg"}, f"{where} [initial]")
+    _unknown(initial, {"misalignment_deg", "positions", "velocities"}, f"{where} [initial]")
     misalignment = initial.get("misalignment_deg", {})
     if not isinstance(misalignment, dict):
         raise SceneError(f"{where} [initial]: misalignment_deg must be a table {{JOINT = degrees}}")
@@ -439,7 +446,28 @@ def scene_from_document(data: dict[str, Any], path: Path, base_dir: Path) -> Sce
         misalignment_deg={k: float(v) for k, v in misalignment.items()},
         document=document,
         base_dir=base_dir,
+        gravity=_gravity(data, where),
+        initial_positions=_joint_values(initial, "positions", f"{where} [initial]"),
+        initial_velocities=_joint_values(initial, "velocities", f"{where} [initial]"),
     )
+
+
+def _gravity(data: dict, where: str) -> tuple[float, float, float]:
+    """``gravity = [gx, gy, gz]`` (m/s^2, world axes): three finite numbers."""
+    value = data.get("gravity", [0.0, 0.0, -9.81])
+    ok = isinstance(value, list) and len(value) == 3
+    ok = ok and all(not isinstance(x, bool) and isinstance(x, (int, float)) and math.isfinite(x) for x in value)
+    if not ok:
+        raise SceneError(f"{where}: gravity={value!r} must be three finite numbers [gx, gy, gz] in m/s^2 (world axes)")
+    return tuple(float(x) for x in value)
+
+
+def _joint_values(table: dict, key: str, where: str) -> dict[str, float]:
+    """A table ``{JOINT = number}`` (the joint names are checked against the mechanism by robot.run.build_run)."""
+    values = table.get(key, {})
+    if not isinstance(values, dict):
+        raise SceneError(f"{where}: {key}={values!r} must be a table {{JOINT = value}}")
+    return {joint: _number(values, joint, f"{where} {key}") for joint in values}
 
 
 def misalignment_rotation(degrees: float) -> np.ndarray:

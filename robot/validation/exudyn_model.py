@@ -12,7 +12,7 @@ Model
 -----
 * Every moving link is an ``ObjectRigidBody`` on a ``NodeRigidBodyEP`` (Euler
   parameters) placed at its centre of mass, link axes as body axes; gravity is a
-  ``LoadMassProportional`` (-9.81 m/s^2 along z).
+  ``LoadMassProportional`` (the run's gravity: the scene's ``gravity``, default -9.81 m/s^2 along z).
 * Revolute joints (``U*_x``, ``U*_y``, ``R1``): ``GenericJoint`` with marker
   frames whose z is the joint axis, ``constrainedAxes = [1,1,1,1,1,0]``.
   Spherical closures ``S*``: ``SphericalJoint``.
@@ -292,7 +292,7 @@ class _ExudynMechanism:
             obj = mbs.AddObject(
                 I.ObjectRigidBody(mass=body.mass, inertia=[J[0, 0], J[1, 1], J[2, 2], J[1, 2], J[0, 2], J[0, 1]], nodeNumber=node)
             )
-            mbs.AddLoad(I.LoadMassProportional(markerNumber=mbs.AddMarker(I.MarkerBodyMass(bodyNumber=obj)), loadVector=list(NE.GRAVITY)))
+            mbs.AddLoad(I.LoadMassProportional(markerNumber=mbs.AddMarker(I.MarkerBodyMass(bodyNumber=obj)), loadVector=list(self.run.mechanism.model.gravity.linear)))
             self.nodes.append(node)
             self.bodies.append(obj)
 

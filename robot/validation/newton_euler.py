@@ -59,7 +59,7 @@ from robot.validation.absolute_constraints import BodyStates, ConstraintSet, cro
 from robot.validation.bodies import MechanismGeometry, read_geometry, rpy_matrix
 from robot.validation.event_loop import EventRun, integrate_with_events
 
-GRAVITY = np.array([0.0, 0.0, -9.81])
+GRAVITY = np.array([0.0, 0.0, -9.81])  # the default; a model uses its run's gravity (NewtonEulerModel.gravity)
 
 
 # --- quaternions (e0 scalar) -------------------------------------------------------------
@@ -133,6 +133,7 @@ class NewtonEulerModel:
     n_candidates: int
     rhs_calls: int = 0
     names: tuple[str, ...] = field(default_factory=tuple)
+    gravity: np.ndarray = field(default_factory=lambda: GRAVITY.copy())  # m/s^2, world axes (the scene's gravity)
     minv: np.ndarray = field(default=None, repr=False)  # (n, 6, 6) block inverses of M
     minv_rows: np.ndarray = field(default=None, repr=False)  # (rows, 2, 6, 6) M^-1 blocks of each row's bodies
 
@@ -268,6 +269,7 @@ def build_model(run: Run) -> NewtonEulerModel:
         ee_offset=-com[ee_link],
         n_candidates=first,
         names=tuple(b.name for b in bodies),
+        gravity=np.array(run.mechanism.model.gravity.linear),
     )
 
 
@@ -321,7 +323,7 @@ def evaluate(model: NewtonEulerModel, t: float, y: np.ndarray, onset: np.ndarray
     states = model.states(y)
     rows = model.constraints.evaluate(states, model.drive.drive(t))
     A, w = states.A[:n], states.w[:n]
-    force = model.mass[:, None] * GRAVITY
+    force = model.mass[:, None] * model.gravity
     Jw = np.einsum("kij,kj->ki", model.inertia, w)
     torque = -cross(w, Jw)
     contacts = []
