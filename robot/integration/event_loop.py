@@ -46,19 +46,8 @@ from robot.integration import methods as registry
 from robot.integration.events import HIDDEN, ONSET, OVER_BOUND, PEAK, all_finite, first_contact_time, hidden_contact, step_flags
 from robot.integration.force_peaks import ForcePeaks, derivative_or_inf
 from robot.integration.options import FailureLimits, SolverOptions
-from robot.integration.records import (
-    FAILED,
-    RECORD_FORCE_PEAK,
-    RECORD_ONSET,
-    RECORD_OUTPUT,
-    RECORD_PEAK,
-    RECORD_START,
-    RECORD_STEP,
-    SUCCESS,
-    OutputTimes,
-    Records,
-    Trajectory,
-)
+from robot.integration.records import FAILED, SUCCESS, OutputTimes, Records, Trajectory
+from robot.integration import records as R
 from robot.integration.solvers import SecondOrderStructure, make_solver
 
 #: restarts at one instant before the run is declared failed (contact events that make no progress)
@@ -196,11 +185,11 @@ class EventDrivenIntegrator:
             start = self.probe(self.t, self.y)
         except _Failure as failure:
             raise ValueError(f"the initial state is not a valid pose ({failure})") from None
-        self.record(self.t, self.y, RECORD_START, forces=start.normal_force)
+        self.record(self.t, self.y, R.RECORD_START, forces=start.normal_force)
         self.pen, self.rate = start.penetration, start.penetration_rate
         if self.outputs is not None:
             for t_out in self.outputs.take(self.t, self.t):
-                self.record(t_out, self.y, RECORD_OUTPUT)
+                self.record(t_out, self.y, R.RECORD_OUTPUT)
         for k in np.flatnonzero(self.pen > 0):
             self.onset[k] = max(self.rate[k], ONSET_RATE_FLOOR)
 
@@ -316,7 +305,7 @@ class EventDrivenIntegrator:
             self.onset[k] = max(rate_e[k], ONSET_RATE_FLOOR)
             self.events.append((t_event, int(k), "onset", float(self.onset[k])))
         self.record_outputs(dense, step.t_old, t_event)
-        self.record(t_event, y_event, RECORD_ONSET, forces=at_event.normal_force)
+        self.record(t_event, y_event, R.RECORD_ONSET, forces=at_event.normal_force)
         if t_event <= self.t:
             self.stalled += 1
             if self.stalled > MAX_STALLED_RESTARTS:
@@ -359,18 +348,18 @@ class EventDrivenIntegrator:
             if not (pen_peak > 0 and t_old < t_peak < t_to):
                 continue
             self.events.append((t_peak, int(k), "peak", float(pen_peak)))
-            self.record(t_peak, y_peak, RECORD_PEAK)
+            self.record(t_peak, y_peak, R.RECORD_PEAK)
             found = None if self.force_peaks is None else self.force_peaks.locate(int(k), dense, t_old, t_peak, t_to, self.onset)
             if found is not None:
                 t_force, y_force, force, onset_rates = found
                 self.events.append((t_force, int(k), "force_peak", force))
-                self.record(t_force, y_force, RECORD_FORCE_PEAK, onset_rates)
+                self.record(t_force, y_force, R.RECORD_FORCE_PEAK, onset_rates)
 
     def accept(self, step: _Step) -> None:
         """Output times inside the step, the step's record; the step's end becomes the current state."""
         if self.outputs is not None and self.outputs.due(step.t_new):
             self.record_outputs(self.dense_output(), step.t_old, step.t_new)
-        self.record(step.t_new, step.y_new, RECORD_STEP, forces=step.probe.normal_force)
+        self.record(step.t_new, step.y_new, R.RECORD_STEP, forces=step.probe.normal_force)
         self.t, self.y = step.t_new, step.y_new
         self.pen, self.rate = step.probe.penetration, step.probe.penetration_rate
         if self.progress is not None:
@@ -414,7 +403,7 @@ class EventDrivenIntegrator:
         if self.outputs is None:
             return
         for t_out in self.outputs.take(t_from, t_to):
-            self.record(t_out, self.system.normalise(dense(t_out)), RECORD_OUTPUT)
+            self.record(t_out, self.system.normalise(dense(t_out)), R.RECORD_OUTPUT)
 
     def trajectory(self, status: int, cause: str | None, message: str, cpu_time: float, wall_time: float) -> Trajectory:
         t, y, onset_rates, kind = self.records.arrays(self.system.n_candidates)

@@ -187,6 +187,27 @@ def _perpendiculars(axis: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return frame[:, 0], frame[:, 1]
 
 
+def _contact_sites(geometry: MechanismGeometry, description, clearances) -> tuple[ContactSiteNE, ...]:
+    """The clearance sites in the Lagrange model's order (closures first, then tree joints), candidates numbered alike."""
+    contacts, first = [], 0
+    closures = {c.name: c for c in description.closures}
+    ordered = [c for c in clearances if c.joint in closures] + [c for c in clearances if c.joint not in closures]
+    for spec in ordered:
+        if spec.joint in closures:
+            c = closures[spec.joint]
+            parent = _element(geometry, c.parent.link, c.parent.xyz, rpy_matrix(c.parent.rpy))
+            child = _element(geometry, c.child.link, c.child.xyz, rpy_matrix(c.child.rpy))
+        else:
+            joint = geometry.joint(spec.joint)
+            align = rotation_z_to(joint.axis)
+            parent = _element(geometry, joint.parent, joint.origin_xyz, joint.origin_rotation @ align)
+            child = _element(geometry, joint.child, np.zeros(3), align)
+        outer, inner = (child, parent) if spec.outer_on == "child" else (parent, child)
+        contacts.append(ContactSiteNE(spec.joint, spec.law, outer, inner, first))
+        first += spec.law.n_candidates
+    return tuple(contacts)
+
+
 def build_model(run: Run) -> NewtonEulerModel:
     """The Newton-Euler model of a built run (same URDF, clearance joints, laws, drive and gains)."""
     scene, description = run.scene, run.mechanism.description
@@ -237,24 +258,7 @@ def build_model(run: Run) -> NewtonEulerModel:
         )
     cs.freeze(len(bodies))
 
-    # clearance sites in the Lagrange model's order (closures first, then tree joints)
-    contacts, first = [], 0
-    closures = {c.name: c for c in description.closures}
-    ordered = [c for c in scene.clearances if c.joint in closures] + [c for c in scene.clearances if c.joint not in closures]
-    for spec in ordered:
-        if spec.joint in closures:
-            c = closures[spec.joint]
-            parent = _element(geometry, c.parent.link, c.parent.xyz, rpy_matrix(c.parent.rpy))
-            child = _element(geometry, c.child.link, c.child.xyz, rpy_matrix(c.child.rpy))
-        else:
-            joint = geometry.joint(spec.joint)
-            align = rotation_z_to(joint.axis)
-            parent = _element(geometry, joint.parent, joint.origin_xyz, joint.origin_rotation @ align)
-            child = _element(geometry, joint.child, np.zeros(3), align)
-        outer, inner = (child, parent) if spec.outer_on == "child" else (parent, child)
-        contacts.append(ContactSiteNE(spec.joint, spec.law, outer, inner, first))
-        first += spec.law.n_candidates
-
+    contacts = _contact_sites(geometry, description, scene.clearances)
     mass = np.array([b.mass for b in bodies])
     inertia = np.array([b.inertia for b in bodies])
     ee_link = scene.end_effector
@@ -264,13 +268,13 @@ def build_model(run: Run) -> NewtonEulerModel:
         inertia=inertia,
         inertia_inv=np.linalg.inv(inertia),
         constraints=cs,
-        contacts=tuple(contacts),
+        contacts=contacts,
         drive=run.dynamics.drive,
         alpha=scene.baumgarte.alpha,
         beta=scene.baumgarte.beta,
         ee_body=geometry.body_index(ee_link),
         ee_offset=-com[ee_link],
-        n_candidates=first,
+        n_candidates=sum(site.law.n_candidates for site in contacts),
         names=tuple(b.name for b in bodies),
     )
 
