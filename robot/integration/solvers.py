@@ -19,11 +19,14 @@ scanned for events). Fixed-step schemes take ``first_step`` as their step size.
 * ``CVODE_BDF``, ``CVODE_Adams``: SUNDIALS CVODE (variable order, variable step)
   through the ``scikit-sundae`` binding (a dependency of the package).
 
-``rejected_steps(solver, accepted)`` recovers the number of rejected steps where
-the method allows it: an explicit Runge-Kutta attempt costs ``n_stages``
-right-hand-side calls (FSAL), so ``rejected = (nfev - start - n_stages accepted) /
-n_stages``; a solver with an ``n_rejected`` attribute reports it itself; scipy's
-implicit methods and CVODE do not expose it (reported as -1).
+Each method's traits (fixed step, Jacobian, structure, stages, replay) are its
+record in :mod:`robot.integration.methods`; a new method registers there.
+
+The step loop counts rejected steps where the method allows it: an explicit
+Runge-Kutta attempt costs ``stages`` right-hand-side calls (FSAL, a registered
+trait), so ``rejected = (calls - n_stages accepted) / n_stages``; a solver with an
+``n_rejected`` attribute reports it itself; scipy's implicit methods and CVODE do
+not expose it (reported as -1).
 """
 
 from __future__ import annotations
@@ -33,31 +36,15 @@ from dataclasses import dataclass
 from typing import Callable
 
 import numpy as np
-from scipy.integrate import BDF, DOP853, LSODA, RK23, RK45, OdeSolver, Radau
+from scipy.integrate import OdeSolver
 from scipy.integrate._ivp.base import DenseOutput
 
+from robot.integration import methods as registry
+from robot.integration.dense import HermiteDense
+# the old trait tables, as live views of the registry (robot.integration.methods)
+from robot.integration.methods import FIXED_STEP_METHODS, JACOBIAN_METHODS, METHODS, STAGES, STRUCTURED_METHODS  # noqa: F401
+
 EPS = np.finfo(float).eps
-
-
-class _HermiteDense(DenseOutput):
-    """Cubic Hermite interpolation between two states (values and derivatives)."""
-
-    def __init__(self, t_old, t, y_old, y, f_old, f):
-        super().__init__(t_old, t)
-        self.h = t - t_old
-        self.y_old, self.y, self.f_old, self.f = y_old, y, f_old, f
-
-    def _call_impl(self, t):
-        s = (np.asarray(t) - self.t_old) / self.h
-        h00 = 2 * s**3 - 3 * s**2 + 1
-        h10 = s**3 - 2 * s**2 + s
-        h01 = -2 * s**3 + 3 * s**2
-        h11 = s**3 - s**2
-        if np.ndim(s) == 0:
-            return h00 * self.y_old + h10 * self.h * self.f_old + h01 * self.y + h11 * self.h * self.f
-        return (
-            np.outer(self.y_old, h00) + np.outer(self.f_old, h10 * self.h) + np.outer(self.y, h01) + np.outer(self.f, h11 * self.h)
-        )
 
 
 def _fixed_step(first_step) -> float:
@@ -97,7 +84,7 @@ class FixedStepRK4(OdeSolver):
         return True, None
 
     def _dense_output_impl(self):
-        return _HermiteDense(self.t_old_value, self.t, self.y_old, self.y, self.f_old, self.f)
+        return HermiteDense(self.t_old_value, self.t, self.y_old, self.f_old, self.y, self.f)
 
     @property
     def step_size(self):
@@ -297,7 +284,7 @@ class GeneralizedAlpha(OdeSolver):
         return True, None
 
     def _dense_output_impl(self):
-        return _HermiteDense(self.t_old_value, self.t, self.y_old, self.y, self.f_old, self.f)
+        return HermiteDense(self.t_old_value, self.t, self.y_old, self.f_old, self.y, self.f)
 
 
 class Newmark(GeneralizedAlpha):
@@ -405,33 +392,6 @@ class CVODEAdams(_CVODEBase):
     cvode_method = "Adams"
 
 
-METHODS: dict[str, type[OdeSolver]] = {
-    "RK23": RK23,
-    "RK45": RK45,
-    "DOP853": DOP853,
-    "Radau": Radau,
-    "BDF": BDF,
-    "LSODA": LSODA,
-    "RK4": FixedStepRK4,
-    "GenAlpha": GeneralizedAlpha,
-    "Newmark": Newmark,
-}
-if _CVODE is not None:
-    METHODS["CVODE_BDF"] = CVODEBDF
-    METHODS["CVODE_Adams"] = CVODEAdams
-
-FIXED_STEP_METHODS = {"RK4", "GenAlpha", "Newmark"}
-
-#: methods whose Newton iterations take a user Jacobian (``jacobian=`` in :func:`make_solver`)
-JACOBIAN_METHODS = frozenset({"BDF", "Radau", "LSODA", "CVODE_BDF", "CVODE_Adams"})
-
-#: methods that need the second-order structure of the state (``structure=`` in :func:`make_solver`)
-STRUCTURED_METHODS = {"GenAlpha", "Newmark"}
-
-#: right-hand-side calls per attempted step (explicit RK, FSAL); None: not countable
-STAGES = {"RK23": 3, "RK45": 6, "DOP853": 12, "RK4": 4}
-
-
 def make_solver(
     method: str,
     fun,
@@ -445,21 +405,20 @@ def make_solver(
     structure: SecondOrderStructure | None = None,
     jacobian: Callable[..., np.ndarray] | None = None,
 ) -> OdeSolver:
-    """Instantiate the named method (see :data:`METHODS`).
+    """Instantiate the named method, as its registered traits say (:mod:`robot.integration.methods`).
 
     ``jacobian(t, y, out=None) -> df/dy`` (a new array when ``out`` is None): the
-    iteration matrix's Jacobian for the methods in :data:`JACOBIAN_METHODS`
-    (ignored by the others); None lets the solver difference ``fun`` itself.
+    iteration matrix's Jacobian for the methods that take one (``takes_jacobian``;
+    ignored by the others); None lets the solver difference ``fun`` itself.
     """
-    if method not in METHODS:
-        raise ValueError(f"integrator method={method!r} is not on offer; choose one of {', '.join(METHODS)}")
-    cls = METHODS[method]
-    if method in STRUCTURED_METHODS:
+    traits = registry.traits(method)  # ValueError naming the method and the choices
+    cls = traits.solver_class()
+    if traits.second_order_structure:
         return cls(fun, t0, y0, t_bound, first_step=first_step, rtol=rtol, atol=atol, structure=structure)
-    if method in FIXED_STEP_METHODS:
+    if traits.fixed_step:
         return cls(fun, t0, y0, t_bound, first_step=first_step)
     kwargs = dict(rtol=rtol, atol=atol, max_step=max_step)
-    if jacobian is not None and method in JACOBIAN_METHODS:
+    if jacobian is not None and traits.takes_jacobian:
         kwargs["jac"] = jacobian  # scipy keeps the returned matrix (a new one per call); CVODE fills its own
     if first_step is not None:
         kwargs["first_step"] = min(first_step, abs(t_bound - t0))

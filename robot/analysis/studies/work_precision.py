@@ -35,14 +35,16 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from robot.integration.solvers import FIXED_STEP_METHODS, METHODS
+from robot.integration import methods as registry
+from robot.integration.methods import FIXED_STEP_METHODS, METHODS
 from robot.run import Run
 from robot.integration.simulation import SolverOptions
 from robot.analysis.studies.common import Outcome, simulate
 
 #: tolerances (variable step) and step sizes (fixed step) of the default sweep
 TOLERANCES = (1e-4, 1e-5, 1e-6, 1e-7, 1e-8, 1e-9)
-STEP_SIZES = {"RK4": (2e-5, 1e-5, 5e-6, 2.5e-6), "GenAlpha": (3e-5, 1e-5, 3e-6, 1e-6), "Newmark": (3e-5, 1e-5, 3e-6, 1e-6)}
+#: step sizes of the fixed-step methods: each method's registered ``step_sizes`` (robot.integration.methods; a live view)
+STEP_SIZES = registry.STEP_SIZES
 REFERENCE = SolverOptions("DOP853", rtol=1e-11, atol=1e-13, max_step=1e-3)
 CHECK = SolverOptions("DOP853", rtol=1e-10, atol=1e-12, max_step=1e-3)
 #: engineering accuracy: end-effector within 1 um (comparable window), peak contact forces within 1 %
