@@ -134,7 +134,6 @@ class DynamicsWorkspace:
 
     data: pin.Data
     rhs_calls: int = 0
-    rejected_stages: int = 0  # trial stages in an absurd pose (see robot.integration.simulation)
     kernel: C.ConstraintKernel | None = None  # Phi, Phi_q, gamma on ``data`` (views bound once)
     sites: tuple = ()  # per contact site: _SiteViews on ``data``
     drive: Callable | None = None  # the drive through its interpolation table (see DriveTable)
