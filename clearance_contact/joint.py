@@ -114,11 +114,8 @@ class Shape:
 
     @property
     def extent(self) -> float:
-        """Largest distance of the solid from the element frame's origin (for the camera)."""
-        reach = {"sphere": self.radius, "box": 0.5 * float(np.linalg.norm(self.size))}.get(
-            self.kind, float(np.hypot(self.radius, 0.5 * self.length))
-        )
-        return float(np.linalg.norm(self.centre)) + reach
+        """Half the largest dimension of the solid (m): sets the camera distance of a close-up."""
+        return max(self.radius, 0.5 * self.length, 0.5 * max(self.size))
 
 
 class ClearanceJoint:
