@@ -198,7 +198,6 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numpy.typing import ArrayLike
 
 from .compiled import (
     STATUS_AXIS_TILT,

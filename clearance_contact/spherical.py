@@ -74,7 +74,6 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numpy.typing import ArrayLike
 
 from .compiled import (
     STATUS_EXTERNAL_FRICTION,

@@ -105,6 +105,7 @@ def run_scene(run: Run, progress: Callable[[float], None] | None = None) -> Simu
         "clearance_outer_on": {c.joint: c.outer_on for c in scene.clearances},
         "clearance_type": {c.joint: c.law.type_name for c in scene.clearances},
         "clearance_geometry": {c.joint: clearance_geometry(c.law) for c in scene.clearances},
+        "clearance_parameters": {c.joint: c.law.scene_parameters for c in scene.clearances},
         "scene_file": str(scene.path.name) if scene.path else None,
         "method": scene.solver.method,
         "rtol": scene.solver.rtol,

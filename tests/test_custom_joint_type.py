@@ -16,13 +16,16 @@ with the static penetration (m g / K)^(1/n).
 
 from __future__ import annotations
 
+import base64
 import math
+import re
 
 import numpy as np
 import pytest
+import umsgpack
 from scipy.integrate import solve_ivp
 
-from clearance_contact import KIND_NONE, KIND_POINT, ClearanceJoint, NoFriction, register_joint_type
+from clearance_contact import KIND_NONE, KIND_POINT, ClearanceJoint, NoFriction, Shape, register_joint_type
 from clearance_contact.compiled import STATUS_NONFINITE_INPUT, STATUS_OK
 from clearance_contact.errors import require_positive
 from clearance_contact.normal_force import lankarani_nikravesh, validate_normal_law
@@ -108,6 +111,15 @@ class PointOnPlane(ClearanceJoint):
 
     def candidate_clearances(self) -> np.ndarray:
         return np.array([self.gap])
+
+    @classmethod
+    def drawing(cls, geometry) -> tuple[Shape, ...]:
+        """A thin translucent slab whose top face is the plane, and the point as a small ball."""
+        slab = 0.002
+        return (
+            Shape("outer", "plane", "box", size=(0.1, 0.1, slab), centre=(0.0, 0.0, -geometry["gap"] - 0.5 * slab), opacity=0.4),
+            Shape("inner", "point", "sphere", radius=0.003),
+        )
 
 
 MASS, GAP, STIFFNESS, EXPONENT, RESTITUTION = 2.5, 0.004, 2.0e6, 1.5, 0.6
@@ -265,3 +277,23 @@ def test_a_type_that_does_not_fit_the_joint_is_a_scene_error(tmp_path):
     (tmp_path / "extra.toml").write_text(text.replace("exponent =", "ball_radius = 0.01\nexponent ="))
     with pytest.raises(SceneError, match=r"unknown key\(s\) ball_radius; valid keys: .*gap"):
         load_scene(tmp_path / "extra.toml")
+
+
+def test_the_custom_joint_animates_with_its_own_drawing_and_contact_points(bouncing, tmp_path):
+    from robot.io.results import save_result
+    from robot.viz.animation import export_html
+
+    run, result = bouncing
+    path = save_result(result, tmp_path / "puck.npz")
+    summary = export_html(path, tmp_path / "puck.html", urdf=run.scene.mechanism_path, speed=0.05, exaggerate=3.0)
+    assert summary.sizes["P"].kind == "point_on_plane" and summary.sizes["P"].values == {"gap": GAP}
+    page = (tmp_path / "puck.html").read_text()
+    commands = [umsgpack.unpackb(base64.b64decode(b)) for b in re.findall(r'meshcatCommand\("([A-Za-z0-9+/=]+)"\)', page)]
+    objects = {c["path"]: c["object"] for c in commands if c["type"] == "set_object"}
+    base = "/meshcat/mechanism/clearance/P"
+    assert objects[f"{base}/inner/point"]["geometries"][0]["radius"] == pytest.approx(0.003)
+    assert objects[f"{base}/outer/plane"]["geometries"][0]["type"] == "BoxGeometry"
+    (animation,) = [c for c in commands if c["type"] == "set_animation"]
+    tracks = {a["path"]: {t["name"]: t for t in a["clip"]["tracks"]} for a in animation["animations"]}
+    visible = [key["value"] for key in tracks[f"{base}/force0/shaft"][".visible"]["keys"]]
+    assert True in visible and False in visible  # the arrow shows during contact only

@@ -44,7 +44,7 @@ import math
 import re
 import time
 import warnings
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Mapping
 
@@ -112,12 +112,15 @@ class ElementSizes:
     """Dimensions of a clearance joint's elements (m), true scale.
 
     ``kind``: the joint type's name (:func:`clearance_contact.joint_type`); ``values``:
-    its ``GEOMETRY_KEYS`` (e.g. ``ball_radius``, ``clearance``), as the scene gave them.
+    its ``GEOMETRY_KEYS`` (e.g. ``ball_radius``, ``clearance``), as the scene gave them;
+    ``parameters``: its other scene keys when the result records them (the drawn law
+    needs e.g. a stiffness a type has no default for).
     """
 
     kind: str
     values: dict[str, float]
     source: str = "default"
+    parameters: dict[str, float] = field(default_factory=dict)
 
     @property
     def joint_type(self) -> type[ClearanceJoint]:
@@ -266,6 +269,8 @@ def clearance_sizes(mechanism: Mechanism, result: SimulationResult) -> tuple[dic
     if isinstance(geometry, Mapping):
         tables = {k: dict(v) for k, v in geometry.items() if isinstance(v, Mapping)}
         source = "result metadata"
+    recorded = metadata.get("clearance_parameters")
+    recorded = {k: dict(v) for k, v in recorded.items() if isinstance(v, Mapping)} if isinstance(recorded, Mapping) else {}
     sizes = {}
     for site in mechanism.clearance_sites:
         law_type = site_types(mechanism, result)[site.name]
@@ -280,7 +285,8 @@ def clearance_sizes(mechanism: Mechanism, result: SimulationResult) -> tuple[dic
                 notes.append(f"{site.name}: {key} {value:.4g} m taken from the result data (source said {values[key]:.4g} m)")
                 values[key] = value
                 origin = f"{origin}; {key} from result data"
-        sizes[site.name] = ElementSizes(law_type.type_name, values, source=origin)
+        parameters = {key: float(value) for key, value in recorded.get(site.name, {}).items() if key in law_type.SCENE_KEYS and key not in values}
+        sizes[site.name] = ElementSizes(law_type.type_name, values, source=origin, parameters=parameters)
     return sizes, notes
 
 
@@ -380,7 +386,7 @@ def _drawing_law(size: ElementSizes, k: float) -> ClearanceJoint | None:
     """The contact law of the *drawn* joint (gaps magnified by k), used only for its contact points; None if unavailable."""
     law_type = size.joint_type
     try:
-        return law_type.from_scene(law_type.magnified(size.values, k), STEEL, STEEL, 0.9, NoFriction())
+        return law_type.from_scene({**size.parameters, **law_type.magnified(size.values, k)}, STEEL, STEEL, 0.9, NoFriction())
     except Exception:  # noqa: BLE001 - e.g. sizes a type rejects: the arrows are then not drawn
         return None
 
