@@ -58,6 +58,7 @@ from .result import JointContact
 __all__ = ["ClearanceJoint", "Shape", "output_layout", "COMMON_OUTPUTS"]
 
 _NOTHING_GIVEN: dict = {}
+_ROTATION_UNUSED = np.eye(3)
 
 #: the sections every law writes, in order, with their size in units of (k, r)
 COMMON_OUTPUTS = (
@@ -133,6 +134,8 @@ class ClearanceJoint:
     ``DEFAULT_GEOMETRY``: sizes drawn when a result does not record them.
     ``KERNEL_ID``: its id in the compiled dispatcher, None for a type evaluated in Python.
     ``EXAGGERATE_TILT``: an animation magnifies the inner element's axis tilt too.
+    ``PENETRATION_USES_ROTATIONS``: False if ``penetration_kernel`` reads positions only
+    (the rotations are then not converted: event functions call :meth:`penetration` often).
     ``kernel``, ``penetration_kernel``: its law (signatures in the module docstring).
 
     Instances hold ``kernel_parameters`` (float64 array for the kernels) and call
@@ -153,6 +156,7 @@ class ClearanceJoint:
     DEFAULT_GEOMETRY: ClassVar[Mapping[str, float]] = {}
     KERNEL_ID: ClassVar[int | None] = None
     EXAGGERATE_TILT: ClassVar[bool] = False
+    PENETRATION_USES_ROTATIONS: ClassVar[bool] = True  # False: ``penetration_kernel`` reads positions only
     kernel: Any = None
     penetration_kernel: Any = None
     n_candidates: ClassVar[int] = 0
@@ -269,16 +273,17 @@ class ClearanceJoint:
         self, outer_rotation: ArrayLike, outer_position: ArrayLike, inner_rotation: ArrayLike, inner_position: ArrayLike
     ) -> np.ndarray:
         """(k,) deepest penetration (m) of each candidate, > 0 in contact.  Cheap (no velocities): events."""
-        pose = (
-            state_array("outer_rotation", outer_rotation, ROTATION_SHAPE),
-            state_array("outer_position", outer_position, VECTOR_SHAPE),
-            state_array("inner_rotation", inner_rotation, ROTATION_SHAPE),
-            state_array("inner_position", inner_position, VECTOR_SHAPE),
-        )
+        if self.PENETRATION_USES_ROTATIONS:
+            outer_rotation = state_array("outer_rotation", outer_rotation, ROTATION_SHAPE)
+            inner_rotation = state_array("inner_rotation", inner_rotation, ROTATION_SHAPE)
+        else:  # not read by the kernel: not converted (event functions call this often)
+            outer_rotation = inner_rotation = _ROTATION_UNUSED
+        outer_position = state_array("outer_position", outer_position, VECTOR_SHAPE)
+        inner_position = state_array("inner_position", inner_position, VECTOR_SHAPE)
         out = np.empty(self.N_CANDIDATES)
-        status = self.penetration_kernel(self.kernel_parameters, *pose, out)
+        status = self.penetration_kernel(self.kernel_parameters, outer_rotation, outer_position, inner_rotation, inner_position, out)
         if status != STATUS_OK:
-            raise self._status_error(status, (pose[0], pose[1], None, pose[2], pose[3], None, None), out)
+            raise self._status_error(status, (outer_rotation, outer_position, None, inner_rotation, inner_position, None, None), out)
         return out
 
     def _status_error(self, status: int, state: tuple, out: np.ndarray) -> ContactError:

@@ -331,6 +331,7 @@ class SphericalClearanceJoint(ClearanceJoint):
     GAP_KEYS = ("clearance",)
     DEFAULT_GEOMETRY = {"ball_radius": 0.015, "clearance": 1.0e-4}
     KERNEL_ID = 0
+    PENETRATION_USES_ROTATIONS = False  # delta = |b - s| - c
     kernel = KernelAttribute(spherical_kernel)
     penetration_kernel = staticmethod(spherical_penetration_kernel)
 
