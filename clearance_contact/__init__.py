@@ -12,6 +12,8 @@ as plain Python.
 * :mod:`.normal_force`: Lankarani-Nikravesh law, ``ONSET_RATE_FLOOR``, Hertz impact peak;
 * :mod:`.friction`: Brown-McPhee, Coulomb, no friction;
 * :mod:`.result`: ``JointContact``;
+* :mod:`.joint`: ``ClearanceJoint`` (base class of the joint types), ``Shape``, ``output_layout``;
+* :mod:`.registry`: ``register_joint_type``, ``joint_type``, ``joint_types``;
 * :mod:`.spherical`: ``SphericalClearanceJoint``;
 * :mod:`.revolute`: ``RevoluteClearanceJoint``.
 """
@@ -36,8 +38,9 @@ from .normal_force import (
     validate_normal_law,
 )
 from .result import KIND_LINE, KIND_NONE, KIND_PLANE, KIND_POINT, JointContact
+from .joint import ClearanceJoint, Shape, output_layout
+from .registry import joint_type, joint_types, register_joint_type
 from .spherical import SphericalClearanceJoint
-
 from .revolute import RevoluteClearanceJoint
 
 __all__ = [
@@ -66,6 +69,12 @@ __all__ = [
     "KIND_POINT",
     "KIND_LINE",
     "KIND_PLANE",
+    "ClearanceJoint",
+    "Shape",
+    "output_layout",
+    "register_joint_type",
+    "joint_type",
+    "joint_types",
     "SphericalClearanceJoint",
     "RevoluteClearanceJoint",
 ]

@@ -90,15 +90,9 @@ def build_run(scene: Scene | str | Path, **overrides) -> Run:
     return Run(scene, mechanism, dynamics, y0, layout)
 
 
-GEOMETRY_KEYS = {
-    1: ("ball_radius", "clearance"),
-    4: ("journal_radius", "radial_clearance", "bearing_outer_radius", "bearing_length", "axial_clearance"),
-}
-
-
 def clearance_geometry(law) -> dict[str, float]:
-    """Element dimensions of a clearance joint, with the scene file's key names."""
-    return {key: float(getattr(law, key)) for key in GEOMETRY_KEYS[law.n_candidates]}
+    """Element dimensions of a clearance joint with the scene file's key names, as given (its type's ``GEOMETRY_KEYS``)."""
+    return law.geometry
 
 
 def run_scene(run: Run, progress: Callable[[float], None] | None = None) -> Result:
@@ -111,7 +105,9 @@ def run_scene(run: Run, progress: Callable[[float], None] | None = None) -> Resu
         "urdf_sha256": mechanism_fingerprint(run.mechanism.description.urdf_text),
         "clearance": list(scene.clearance_joints),
         "clearance_outer_on": {c.joint: c.outer_on for c in scene.clearances},
+        "clearance_type": {c.joint: c.law.type_name for c in scene.clearances},
         "clearance_geometry": {c.joint: clearance_geometry(c.law) for c in scene.clearances},
+        "clearance_parameters": {c.joint: c.law.scene_parameters for c in scene.clearances},
         "scene_file": str(scene.path.name) if scene.path else None,
         "method": scene.solver.method,
         "rtol": scene.solver.rtol,

@@ -59,9 +59,15 @@ class Drive(Protocol):
 
 
 class ClearanceJointLaw(Protocol):
-    """What the dynamics needs from a ``clearance_contact`` joint."""
+    """What the dynamics needs from a ``clearance_contact`` joint (a :class:`clearance_contact.ClearanceJoint`).
+
+    ``KERNEL_ID``: the law's id in the compiled dispatcher (:func:`robot.dynamics.rhs_kernels.law_kernel`),
+    None for a law the simulator evaluates through ``evaluate``; ``SITE_KINDS``: the joints it can replace.
+    """
 
     n_candidates: int
+    KERNEL_ID: int | None
+    SITE_KINDS: tuple[str, ...]
 
     def evaluate(self, outer_rotation, outer_position, outer_twist, inner_rotation, inner_position, inner_twist, onset_rates): ...
 
@@ -120,8 +126,11 @@ def make_dynamics_model(
     contacts, offset = [], 0
     for site in mechanism.clearance_sites:
         law = laws[site.name]
-        if (site.kind == "spherical") != (law.n_candidates == 1):
-            raise ValueError(f"clearance site {site.name!r} is {site.kind} but its law has {law.n_candidates} candidates")
+        if site.kind not in law.SITE_KINDS:
+            raise ValueError(
+                f"clearance site {site.name!r} is a {site.kind} joint but its law {type(law).__name__} replaces "
+                f"{' or '.join(law.SITE_KINDS)} joints"
+            )
         contacts.append(ContactSite(site, law, offset))
         offset += law.n_candidates
     ee = mechanism.frame_id(end_effector_frame or "platform")
@@ -204,8 +213,9 @@ class CompiledTerms:
         # per contact site a CompiledSite; its masks, twists and output buffer are views of the
         # packed arrays that all_sites reads
         laws = [contact.law for contact in dynamics.contacts]
-        # a law's kernel is None when it cannot do everything compiled (e.g. a user-defined friction law)
-        compiled_law = [getattr(law, "kernel", None) is not None and hasattr(law, "kernel_parameters") for law in laws]
+        # compiled: a law whose type has a kernel id (known to rhs_kernels.law_kernel) and whose kernel
+        # does everything (``law.kernel`` is None e.g. for a user-defined friction law); others: ``evaluate``
+        compiled_law = [getattr(law, "KERNEL_ID", None) in K.LAW_IDS.values() and law.kernel is not None for law in laws]
         sizes = [law.output_size if ok else 0 for law, ok in zip(laws, compiled_law)]
         self.site_outputs_buffer = np.zeros(sum(sizes))
         self.site_masks = np.zeros((len(laws), 2, model.nv), dtype=np.uint8)
@@ -675,7 +685,8 @@ class _SiteViews:
         self.outer_rotation, self.outer_position = outer.rotation, outer.translation
         self.inner_rotation, self.inner_position = inner.rotation, inner.translation
         # the spherical law's penetration is |b - s| - c: inline it (exactly the law's formula)
-        self.sphere_clearance = contact.law.clearance if type(contact.law) is SphericalClearanceJoint else None
+        law = contact.law
+        self.sphere_clearance = law.socket_radius - law.ball_radius if type(law) is SphericalClearanceJoint else None
         self.touching = False  # in contact at the previous right-hand side (a hint, never a shortcut to a force)
 
     def states(self, model: pin.Model, data: pin.Data):

@@ -38,8 +38,8 @@ import numpy as np
 import pinocchio as pin
 
 from clearance_contact.compiled import JIT_ENABLED, drop_stale_caches, jit
-from clearance_contact.revolute import revolute_kernel
-from clearance_contact.spherical import spherical_kernel
+from clearance_contact.revolute import RevoluteClearanceJoint, revolute_kernel
+from clearance_contact.spherical import SphericalClearanceJoint, spherical_kernel
 
 if JIT_ENABLED:
     # this package's compiled code calls clearance_contact's law kernels (see drop_stale_caches)
@@ -246,11 +246,13 @@ def power_series(coefficients, x, out):
         out[j] = value
 
 
-#: the shipped laws' kernels and the ids the compiled code knows them by. numba caches a compiled
-#: function on disk only if no argument is itself a compiled function, and a kernel passed as an
-#: argument costs ~7 us of dispatch a call: so the law is chosen by an integer inside compiled code
-SPHERICAL_LAW, REVOLUTE_LAW = 0, 1
-LAW_IDS = {spherical_kernel: SPHERICAL_LAW, revolute_kernel: REVOLUTE_LAW}
+#: the compiled joint types' kernels and the ids the compiled code knows them by (each type's
+#: ``KERNEL_ID``). numba caches a compiled function on disk only if no argument is itself a compiled
+#: function, and a kernel passed as an argument costs ~7 us of dispatch a call: so the law is chosen
+#: by an integer inside compiled code. A type without a branch in law_kernel (KERNEL_ID None, e.g.
+#: defined outside clearance_contact) is evaluated through its ``evaluate``.
+SPHERICAL_LAW, REVOLUTE_LAW = SphericalClearanceJoint.KERNEL_ID, RevoluteClearanceJoint.KERNEL_ID
+LAW_IDS = {SphericalClearanceJoint.kernel: SPHERICAL_LAW, RevoluteClearanceJoint.kernel: REVOLUTE_LAW}
 
 
 #: status of :func:`law_kernel` for a law id it does not know (nothing written)

@@ -127,9 +127,7 @@ def penetration_bounds(dynamics: D.DynamicsModel, limits: FailureLimits) -> np.n
     """Per candidate: ``limits.penetration_ratio`` x its joint's clearance (radial or axial)."""
     bounds = np.empty(dynamics.n_candidates)
     for contact in dynamics.contacts:
-        law = contact.law
-        clearances = [law.clearance] if law.n_candidates == 1 else [law.radial_clearance, law.axial_clearance] * 2
-        bounds[contact.candidates] = limits.penetration_ratio * np.array(clearances)
+        bounds[contact.candidates] = limits.penetration_ratio * contact.law.candidate_clearances()
     return bounds
 
 

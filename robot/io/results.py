@@ -225,17 +225,8 @@ def compute_outputs(dynamics: D.DynamicsModel, trajectory: Trajectory) -> dict[s
         "actuator_work": y[:, nq + nv],
         "contact_work": y[:, nq + nv + 1],
     }
-    per_site = {}
-    for contact in dynamics.contacts:
-        name, k = contact.site.name, contact.law.n_candidates
-        rings = 1 if k == 1 else 2
-        per_site[name] = {
-            "eccentricity": np.empty((n, 3) if rings == 1 else (n, rings, 3)),
-            "penetration": np.empty((n, k)),
-            "normal_force": np.empty((n, k)),
-            "friction_force": np.empty((n, k)),
-            "kind": np.empty((n, k), dtype=np.int8),
-        }
+    # per clearance joint: the arrays its type records (clearance_contact.ClearanceJoint.result_arrays)
+    per_site = {contact.site.name: contact.law.result_arrays(n) for contact in dynamics.contacts}
     ee = dynamics.end_effector_frame
     act = mechanism.actuator_v_index
     for i in range(n):
@@ -254,12 +245,7 @@ def compute_outputs(dynamics: D.DynamicsModel, trajectory: Trajectory) -> dict[s
         out["ee_acceleration"][i] = pin.getFrameClassicalAcceleration(model, data, ee, LWA).linear
         out["kinetic_energy"][i], out["potential_energy"][i] = D.energy(dynamics, workspace, q, v)
         for contact, result in zip(dynamics.contacts, evaluation.contacts):
-            arrays = per_site[contact.site.name]
-            arrays["eccentricity"][i] = result.eccentricity[0] if contact.law.n_candidates == 1 else result.eccentricity
-            arrays["penetration"][i] = result.penetration
-            arrays["normal_force"][i] = result.normal_force
-            arrays["friction_force"][i] = np.linalg.norm(np.atleast_2d(result.friction_force), axis=1)
-            arrays["kind"][i] = result.kind
+            contact.law.record(per_site[contact.site.name], i, result)
     for name, arrays in per_site.items():
         for key, value in arrays.items():
             out[f"{name}_{key}"] = value

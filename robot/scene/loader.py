@@ -37,11 +37,12 @@ Schema (defaults in brackets)::
 
     [[clearance]]      # one per clearance joint
     joint = "S1"       # the joint or closure it replaces
-    type = "spherical" # or "revolute"
+    type = "spherical" # a registered joint type: "spherical", "revolute" (clearance_contact.joint_types())
     outer_on = "child" # body carrying the socket / bearing
     material = "steel" # or outer_material / inner_material
     restitution = 0.9
     friction = {law = "brown_mcphee", static = 0.07, dynamic = 0.05, transition_velocity = 5e-3}
+    # the type's own keys (its SCENE_KEYS, numbers):
     # spherical: ball_radius, clearance, exponent [1.5], stiffness [Hertz]
     # revolute: journal_radius, radial_clearance, bearing_outer_radius, bearing_length,
     #           axial_clearance, radial_exponent, axial_exponent, point_exponent, *_stiffness
@@ -71,11 +72,13 @@ from clearance_contact import (
     CoulombFriction,
     Material,
     NoFriction,
-    RevoluteClearanceJoint,
-    SphericalClearanceJoint,
+    joint_type,
+    joint_types,
 )
+from clearance_contact.registry import COMMON_SCENE_KEYS
 
-from robot.errors import SceneError
+from robot.errors import MechanismFileError, SceneError
+from robot.model.description import parse_mechanism
 from robot.scene.overrides import apply_overrides
 from robot.dynamics.baumgarte import Baumgarte
 from robot.integration.options import STRUCTURED, FailureLimits, SolverOptions
@@ -89,12 +92,6 @@ _BAUMGARTE_KEYS = {"alpha", "beta"}
 _LIMIT_KEYS = {"penetration_ratio", "max_residual", "min_step", "max_wall_time"}
 _MATERIAL_KEYS = {"youngs_modulus", "poisson_ratio"}
 _FRICTION_KEYS = {"law", "static", "dynamic", "transition_velocity", "viscous", "reference_force", "coefficient", "regularisation_velocity"}
-_COMMON_CLEARANCE = {"joint", "type", "outer_on", "material", "outer_material", "inner_material", "restitution", "friction"}
-_SPHERICAL_KEYS = _COMMON_CLEARANCE | {"ball_radius", "clearance", "exponent", "stiffness"}
-_REVOLUTE_KEYS = _COMMON_CLEARANCE | {
-    "journal_radius", "radial_clearance", "bearing_outer_radius", "bearing_length", "axial_clearance",
-    "radial_exponent", "axial_exponent", "point_exponent", "radial_stiffness", "axial_stiffness", "point_stiffness",
-}
 _COORDINATE_KEYS = {"offset", "rate", "amplitudes", "harmonics", "phases"}
 
 
@@ -270,9 +267,10 @@ def _clearance(table: Any, index: int, materials: dict[str, Material], where: st
     if not isinstance(table, dict):
         raise SceneError(f"{w} must be a table")
     kind = table.get("type")
-    if kind not in ("spherical", "revolute"):
-        raise SceneError(f"{w}: type={kind!r} must be 'spherical' or 'revolute'", key="type", value=kind)
-    _unknown(table, _SPHERICAL_KEYS if kind == "spherical" else _REVOLUTE_KEYS, w)
+    if not isinstance(kind, str) or kind not in joint_types():
+        raise SceneError(f"{w}: type={kind!r} is not a clearance joint type; registered types: {', '.join(joint_types())}", key="type", value=kind)
+    law_type = joint_type(kind)
+    _unknown(table, COMMON_SCENE_KEYS | set(law_type.SCENE_KEYS), w)
     joint = table.get("joint")
     if not isinstance(joint, str) or not joint:
         raise SceneError(f"{w}: joint={joint!r} must name the joint or closure it replaces", key="joint", value=joint)
@@ -290,36 +288,44 @@ def _clearance(table: Any, index: int, materials: dict[str, Material], where: st
     outer, inner = material("outer_material"), material("inner_material")
     friction = _friction(table.get("friction"), f"{w} friction")
     restitution = _number(table, "restitution", w, 0.9)
+    for key in law_type.REQUIRED_KEYS:
+        _number(table, key, w, required=True)
+    parameters = {key: _number(table, key, w) for key in law_type.SCENE_KEYS if key in table}
     try:
-        if kind == "spherical":
-            ball = _number(table, "ball_radius", w, required=True)
-            clearance = _number(table, "clearance", w, required=True)
-            law = SphericalClearanceJoint(
-                ball, ball + clearance, inner, outer, restitution, _number(table, "exponent", w, 1.5), friction, _number(table, "stiffness", w)
-            )
-        else:
-            journal = _number(table, "journal_radius", w, required=True)
-            bearing_length = _number(table, "bearing_length", w, required=True)
-            optional = {
-                key: _number(table, key, w)
-                for key in ("radial_exponent", "axial_exponent", "point_exponent", "radial_stiffness", "axial_stiffness", "point_stiffness")
-                if key in table
-            }
-            law = RevoluteClearanceJoint(
-                journal_radius=journal,
-                bearing_inner_radius=journal + _number(table, "radial_clearance", w, required=True),
-                bearing_outer_radius=_number(table, "bearing_outer_radius", w, required=True),
-                journal_length=bearing_length + _number(table, "axial_clearance", w, required=True),
-                bearing_length=bearing_length,
-                journal_material=inner,
-                bearing_material=outer,
-                restitution=restitution,
-                friction=friction,
-                **optional,
-            )
+        law = law_type.from_scene(parameters, outer, inner, restitution, friction)
     except ContactError as exc:
         raise SceneError(f"{w}: {exc}", key=getattr(exc, "key", None), value=getattr(exc, "value", None)) from None
     return ClearanceSpec(joint, kind, outer_on, law)
+
+
+def _check_site_kinds(clearances: tuple[ClearanceSpec, ...], mechanism_path: Path, where: str) -> None:
+    """Each clearance type must fit the kind of joint it replaces (its ``SITE_KINDS``).
+
+    The mechanism file is only parsed as XML here (no model is built); a joint it does
+    not have, or a file it cannot read, is left to :func:`robot.model.mechanism.build_mechanism`.
+    """
+    if not clearances:
+        return
+    try:
+        description = parse_mechanism(mechanism_path)
+    except MechanismFileError:
+        return
+    kinds = {c.name: (c.kind, "closure") for c in description.closures}
+    for name, joint in description.joints.items():
+        if joint.kind in ("revolute", "continuous"):  # a tree joint with clearance becomes a free joint
+            kinds.setdefault(name, ("revolute", "joint"))
+    for spec in clearances:
+        if spec.joint not in kinds:
+            continue
+        site_kind, element = kinds[spec.joint]
+        law_type = joint_type(spec.kind)
+        if site_kind not in law_type.SITE_KINDS:
+            fitting = [name for name in joint_types() if site_kind in joint_type(name).SITE_KINDS]
+            raise SceneError(
+                f"{where} clearance {spec.joint!r}: type={spec.kind!r} cannot replace {spec.joint!r}, a {site_kind} "
+                f"{element} of {description.name!r} (a {spec.kind} clearance joint replaces {' or '.join(law_type.SITE_KINDS)} "
+                f"joints); use type = {' or '.join(repr(n) for n in fitting) or 'a type for ' + site_kind + ' joints'}"
+            )
 
 
 def _trajectory(table: dict, where: str) -> TrajectorySpec:
@@ -418,6 +424,7 @@ def scene_from_document(data: dict[str, Any], path: Path, base_dir: Path) -> Sce
     joints = [c.joint for c in clearances]
     if len(set(joints)) != len(joints):
         raise SceneError(f"{where}: a joint carries two clearance definitions: {joints}")
+    _check_site_kinds(clearances, mechanism_path, where)
     initial = _table(data, "initial", where)
     _unknown(initial, {"misalignment_deg", "positions", "velocities"}, f"{where} [initial]")
     misalignment = initial.get("misalignment_deg", {})

@@ -3,9 +3,10 @@
 The mechanism is rebuilt from the result's metadata (mechanism file and
 clearance joints) and checked against the result's URDF fingerprint; the links
 are drawn from the URDF visuals (Pinocchio geometry model, coal primitives) at
-their simulated poses. Each clearance joint adds its two elements (translucent
-socket + ball, or bearing tube + journal with flanges), a trail of the inner
-element's centre and contact-force arrows.
+their simulated poses. Each clearance joint adds its two elements as its type draws
+them (``ClearanceJoint.drawing``: translucent socket + ball, or bearing tube +
+journal with flanges), a trail of the inner element's centre and contact-force
+arrows.
 
 Exaggeration (``exaggerate = K``) magnifies only what happens *inside* the
 clearance joints, so sub-millimetre motion becomes visible:
@@ -15,16 +16,17 @@ clearance joints, so sub-millimetre motion becomes visible:
   outer element's centre by ``K`` times the true displacement; for a revolute
   joint the tilt of the journal axis relative to the bearing axis is magnified
   too, ``tan(drawn tilt) = K tan(true tilt)`` (the spin about the axis is true);
-* the gaps are magnified by the same factor: socket radius ``r_ball + K c``,
-  bearing bore ``r_journal + K c_r`` (wall thickness true), journal length
-  between flanges ``L_bearing + K c_a``; so the elements touch in the picture
+* the gaps are magnified by the same factor (the type's ``magnified``): socket
+  radius ``r_ball + K c``, bearing bore ``r_journal + K c_r`` (wall thickness true),
+  journal length between flanges ``L_bearing + K c_a``; so the elements touch in the picture
   exactly when they touch in the simulation, and a penetration ``delta`` is drawn
   as ``K delta``;
 * links, element radii and lengths other than the gaps are true to scale.
 
 Trails show the inner element's centre relative to the outer element (drawn in
 the moving outer frame, magnified by ``K``), growing as the animation plays.
-Force arrows end at the contact point and point along the normal force on the
+Force arrows end at the contact point of the drawn joint's own contact law (the
+type built with magnified gaps) and point along the normal force on the
 inner element; length ``arrow_length * F / F_max`` (``F_max``: the largest
 normal force of the whole result). Each arrow shows the largest force recorded
 within its frame's time window, so impacts shorter than one frame still appear.
@@ -42,13 +44,15 @@ import math
 import re
 import time
 import warnings
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Mapping
 
 import coal
 import numpy as np
 import pinocchio as pin
+
+from clearance_contact import STEEL, ClearanceJoint, ContactError, NoFriction, Shape, joint_type, joint_types
 
 from robot.io.atomic import atomic_write
 from robot.errors import ResultFileError, RobotError
@@ -57,18 +61,6 @@ from robot.io.results import SimulationResult, load_result, mechanism_fingerprin
 
 REPO_ROOT = Path(__file__).resolve().parents[2]
 URDF_DIR = REPO_ROOT / "urdf"
-
-# the geometry the shipped scenes use, when neither the result nor its scene gives it
-DEFAULT_SIZES = {
-    "spherical": {"ball_radius": 0.015, "clearance": 1.0e-4},
-    "revolute": {
-        "journal_radius": 0.02,
-        "radial_clearance": 1.0e-4,
-        "bearing_outer_radius": 0.035,
-        "bearing_length": 0.04,
-        "axial_clearance": 1.0e-4,
-    },
-}
 
 OUTER_COLOR = 0x7FA7D0
 INNER_COLOR = 0xE0A020
@@ -119,19 +111,20 @@ class AnimationOptions:
 class ElementSizes:
     """Dimensions of a clearance joint's elements (m), true scale.
 
-    Spherical: ``inner_radius`` = ball radius, ``clearance`` = socket radius -
-    ball radius. Revolute: ``inner_radius`` = journal radius, ``clearance`` =
-    radial clearance, plus bearing outer radius, bearing length and axial
-    clearance (journal length between flanges - bearing length).
+    ``kind``: the joint type's name (:func:`clearance_contact.joint_type`); ``values``:
+    its ``GEOMETRY_KEYS`` (e.g. ``ball_radius``, ``clearance``), as the scene gave them;
+    ``parameters``: its other scene keys when the result records them (the drawn law
+    needs e.g. a stiffness a type has no default for).
     """
 
     kind: str
-    inner_radius: float
-    clearance: float
-    outer_radius: float = 0.0
-    bearing_length: float = 0.0
-    axial_clearance: float = 0.0
+    values: dict[str, float]
     source: str = "default"
+    parameters: dict[str, float] = field(default_factory=dict)
+
+    @property
+    def joint_type(self) -> type[ClearanceJoint]:
+        return joint_type(self.kind)
 
 
 @dataclass
@@ -201,8 +194,25 @@ def load_for_animation(
         )
     choice = _clearance_choice(metadata, label)
     mechanism = build_mechanism(urdf, choice)
-    _check_arrays(mechanism, result, label)
+    _check_arrays(mechanism, result, label, site_types(mechanism, result, label))
     return mechanism, result
+
+
+def site_types(mechanism: Mechanism, result: SimulationResult, label: str = "result") -> dict[str, type[ClearanceJoint]]:
+    """The joint type of each clearance joint: metadata ``clearance_type`` (older results: the joint's kind)."""
+    recorded = result.metadata.get("clearance_type") if isinstance(result.metadata, Mapping) else None
+    recorded = recorded if isinstance(recorded, Mapping) else {}
+    out = {}
+    for site in mechanism.clearance_sites:
+        name = recorded.get(site.name, site.kind)
+        try:
+            out[site.name] = joint_type(name)
+        except ContactError:
+            raise ResultFileError(
+                f"{label}: clearance joint {site.name!r} is of type {name!r}, which is not registered "
+                f"(registered: {', '.join(joint_types())}); import the module that registers it first"
+            ) from None
+    return out
 
 
 def _clearance_choice(metadata: Mapping[str, Any], label: str) -> dict[str, str]:
@@ -219,7 +229,7 @@ def _clearance_choice(metadata: Mapping[str, Any], label: str) -> dict[str, str]
     return choice
 
 
-def _check_arrays(mechanism: Mechanism, result: SimulationResult, label: str) -> None:
+def _check_arrays(mechanism: Mechanism, result: SimulationResult, label: str, types: Mapping[str, type[ClearanceJoint]]) -> None:
     arrays = result.arrays
     t, q = np.asarray(arrays["t"]), np.asarray(arrays["q"])
     n = t.shape[0] if t.ndim == 1 else -1
@@ -233,7 +243,7 @@ def _check_arrays(mechanism: Mechanism, result: SimulationResult, label: str) ->
     if n > 1 and np.any(np.diff(t) < 0):
         raise ResultFileError(f"{label}: times 't' are not sorted")
     for site in mechanism.clearance_sites:
-        k = 1 if site.kind == "spherical" else 4
+        k = types[site.name].N_CANDIDATES
         key = f"{site.name}_normal_force"
         if key not in arrays:
             raise ResultFileError(f"{label} lacks the array {key!r} of clearance joint {site.name!r}")
@@ -248,11 +258,11 @@ def clearance_sizes(mechanism: Mechanism, result: SimulationResult) -> tuple[dic
     """Element dimensions per clearance joint, and notes on where they came from.
 
     Sources, first found: the result's metadata ``clearance_geometry`` (joint ->
-    table with the scene keys ``ball_radius``, ``clearance``, ``journal_radius``,
-    ``radial_clearance``, ``bearing_outer_radius``, ``bearing_length``,
-    ``axial_clearance``), written by :func:`robot.run.run_scene`; otherwise
-    :data:`DEFAULT_SIZES`. A spherical clearance is then checked against the
-    result itself (|eccentricity| - penetration) and taken from it if they differ.
+    table with its type's ``GEOMETRY_KEYS``, the scene's key names), written by
+    :func:`robot.run.run_scene`; otherwise the type's ``DEFAULT_GEOMETRY``. Sizes
+    the type can measure from the result itself (``geometry_from_result``: the
+    spherical clearance as |eccentricity| - penetration) are taken from it if they
+    differ by more than 2 %.
     """
     notes: list[str] = []
     metadata = result.metadata
@@ -262,39 +272,25 @@ def clearance_sizes(mechanism: Mechanism, result: SimulationResult) -> tuple[dic
     if isinstance(geometry, Mapping):
         tables = {k: dict(v) for k, v in geometry.items() if isinstance(v, Mapping)}
         source = "result metadata"
+    recorded = metadata.get("clearance_parameters")
+    recorded = {k: dict(v) for k, v in recorded.items() if isinstance(v, Mapping)} if isinstance(recorded, Mapping) else {}
     sizes = {}
     for site in mechanism.clearance_sites:
-        table = {**DEFAULT_SIZES[site.kind], **tables.get(site.name, {})}
+        law_type = site_types(mechanism, result)[site.name]
+        table = {**law_type.DEFAULT_GEOMETRY, **tables.get(site.name, {})}
         origin = source if site.name in tables else "default"
         if origin == "default":
             notes.append(f"{site.name}: element sizes not recorded in the result; drawn with default sizes")
-        if site.kind == "spherical":
-            size = ElementSizes("spherical", float(table["ball_radius"]), float(table["clearance"]), source=origin)
-            measured = _measured_spherical_clearance(result, site.name)
-            if measured is not None and abs(measured - size.clearance) > 0.02 * size.clearance:
-                notes.append(f"{site.name}: clearance {measured:.4g} m taken from the result data (source said {size.clearance:.4g} m)")
-                size = replace(size, clearance=measured, source=f"{origin}; clearance from result data")
-        else:
-            size = ElementSizes(
-                "revolute",
-                float(table["journal_radius"]),
-                float(table["radial_clearance"]),
-                float(table["bearing_outer_radius"]),
-                float(table["bearing_length"]),
-                float(table["axial_clearance"]),
-                source=origin,
-            )
-        sizes[site.name] = size
+        values = {key: float(table[key]) for key in law_type.GEOMETRY_KEYS}
+        measured = law_type.geometry_from_result(result.arrays.get(f"{site.name}_eccentricity"), result.arrays.get(f"{site.name}_penetration"))
+        for key, value in measured.items():
+            if abs(value - values[key]) > 0.02 * abs(values[key]):
+                notes.append(f"{site.name}: {key} {value:.4g} m taken from the result data (source said {values[key]:.4g} m)")
+                values[key] = value
+                origin = f"{origin}; {key} from result data"
+        parameters = {key: float(value) for key, value in recorded.get(site.name, {}).items() if key in law_type.SCENE_KEYS and key not in values}
+        sizes[site.name] = ElementSizes(law_type.type_name, values, source=origin, parameters=parameters)
     return sizes, notes
-
-
-def _measured_spherical_clearance(result: SimulationResult, name: str) -> float | None:
-    e, pen = result.arrays.get(f"{name}_eccentricity"), result.arrays.get(f"{name}_penetration")
-    if e is None or pen is None or np.ndim(e) != 2 or np.shape(e)[1] != 3:
-        return None
-    values = np.linalg.norm(e, axis=1) - np.asarray(pen).reshape(len(e), -1)[:, 0]
-    values = values[np.isfinite(values)]
-    return float(np.median(values)) if values.size and np.median(values) > 0 else None
 
 
 # --------------------------------------------------------------------------- frames
@@ -359,10 +355,10 @@ def sample_frames(mechanism: Mechanism, result: SimulationResult, options: Anima
 # --------------------------------------------------------------------------- geometry helpers
 
 
-def _exaggerated_inner(outer: pin.SE3, inner: pin.SE3, kind: str, k: float) -> pin.SE3:
-    """Drawn pose of the inner element: displacement from the outer centre times k (and axis tilt, revolute)."""
+def _exaggerated_inner(outer: pin.SE3, inner: pin.SE3, tilt_too: bool, k: float) -> pin.SE3:
+    """Drawn pose of the inner element: displacement from the outer centre times k (and axis tilt if ``tilt_too``)."""
     position = outer.translation + k * (inner.translation - outer.translation)
-    if kind == "spherical" or k == 1.0:
+    if not tilt_too or k == 1.0:
         return pin.SE3(inner.rotation, position)
     relative = outer.rotation.T @ inner.rotation
     z = relative[:, 2]
@@ -389,55 +385,20 @@ def _homogeneous(rotation: np.ndarray, translation: np.ndarray) -> np.ndarray:
     return matrix
 
 
-def _contacts(site_kind: str, size: ElementSizes, outer: pin.SE3, inner_drawn: pin.SE3, k: float):
-    """(point, unit force direction on the inner element) per contact candidate, in the drawn geometry.
-
-    Fallback for :func:`_law_contacts`: radial contacts at the bearing rings, axial ones on the
-    flange at the bearing axis (the contact law puts line contacts mid-way along the half-bearing).
-    """
-    if site_kind == "spherical":
-        e = inner_drawn.translation - outer.translation
-        norm = np.linalg.norm(e)
-        n = e / norm if norm > 1e-12 else outer.rotation[:, 2]
-        return [(inner_drawn.translation + size.inner_radius * n, -n)]
-    half_journal = 0.5 * (size.bearing_length + k * size.axial_clearance)
-    rotation, origin = inner_drawn.rotation, inner_drawn.translation
-    out = []
-    for sign in (1.0, -1.0):  # top ring, bottom ring
-        ring = rotation.T @ (outer.translation + sign * 0.5 * size.bearing_length * outer.rotation[:, 2] - origin)
-        radial = np.array([ring[0], ring[1], 0.0])
-        norm = np.linalg.norm(radial)
-        u = radial / norm if norm > 1e-12 else np.array([1.0, 0.0, 0.0])
-        point_radial = -size.inner_radius * u + np.array([0.0, 0.0, ring[2]])
-        point_axial = np.array([ring[0], ring[1], sign * half_journal])
-        out.append((origin + rotation @ point_radial, rotation @ u))
-        out.append((origin + rotation @ point_axial, rotation @ np.array([0.0, 0.0, sign])))
-    return out  # [top_radial, top_axial, bottom_radial, bottom_axial]
-
-
-def _drawing_law(size: ElementSizes, k: float):
+def _drawing_law(size: ElementSizes, k: float) -> ClearanceJoint | None:
     """The contact law of the *drawn* joint (gaps magnified by k), used only for its contact points; None if unavailable."""
+    law_type = size.joint_type
     try:
-        from clearance_contact import STEEL, RevoluteClearanceJoint, SphericalClearanceJoint
-
-        if size.kind == "spherical":
-            return SphericalClearanceJoint(size.inner_radius, size.inner_radius + k * size.clearance, STEEL, STEEL)
-        bore = size.inner_radius + k * size.clearance
-        return RevoluteClearanceJoint(
-            journal_radius=size.inner_radius,
-            bearing_inner_radius=bore,
-            bearing_outer_radius=bore + max(size.outer_radius - size.inner_radius - size.clearance, 0.1 * size.inner_radius),
-            journal_length=size.bearing_length + k * size.axial_clearance,
-            bearing_length=size.bearing_length,
-            journal_material=STEEL,
-            bearing_material=STEEL,
-        )
-    except Exception:  # noqa: BLE001 - fall back to the geometric approximation of _contacts
+        return law_type.from_scene({**size.parameters, **law_type.magnified(size.values, k)}, STEEL, STEEL, 0.9, NoFriction())
+    except Exception:  # noqa: BLE001 - e.g. sizes a type rejects: the arrows are then not drawn
         return None
 
 
 def _law_contacts(law, outer: pin.SE3, inner_drawn: pin.SE3):
-    """Contact points and force directions on the inner element from the contact law; None if it refuses the pose."""
+    """Contact points and force directions on the inner element from the contact law; None if it refuses the pose.
+
+    Each arrow sits half-way between the two contact points, where the laws apply the force.
+    """
     if law is None:
         return None
     try:
@@ -503,6 +464,25 @@ def _material(mg, color: int, opacity: float = 1.0):
     return mg.MeshPhongMaterial(color=color, opacity=opacity, transparent=opacity < 1.0, depthWrite=opacity >= 1.0)
 
 
+def _meshcat_shape(mg, shape: Shape):
+    """The meshcat geometry of a :class:`clearance_contact.Shape` (cylinders and tubes along the element's z)."""
+    place = _translation(*shape.centre)
+    if shape.kind == "sphere":
+        return mg.Sphere(shape.radius) if not any(shape.centre) else _shifted(mg.Sphere, place)(shape.radius)
+    if shape.kind == "cylinder":
+        return _shifted(mg.Cylinder, place @ _Z_FROM_Y)(shape.length, shape.radius)
+    if shape.kind == "tube":
+        vertices, faces = _tube_mesh(shape.inner_radius, shape.radius, shape.length)
+        return mg.TriangularMeshGeometry(vertices + np.asarray(shape.centre), faces)
+    if shape.kind == "box":
+        return _shifted(mg.Box, place)(list(shape.size))
+    raise AnimationError(f"shape {shape.name!r}: kind={shape.kind!r} is not drawable; use sphere, cylinder, tube or box")
+
+
+def _shape_material(mg, shape: Shape):
+    return _material(mg, OUTER_COLOR if shape.element == "outer" else INNER_COLOR, shape.opacity)
+
+
 def _draw_static(vis, mechanism: Mechanism, sizes: Mapping[str, ElementSizes], options: AnimationOptions):
     """Create every object (URDF visuals, clearance elements, arrows); return the pinocchio visualizer."""
     meshcat, mg = _meshcat()
@@ -526,26 +506,12 @@ def _draw_static(vis, mechanism: Mechanism, sizes: Mapping[str, ElementSizes], o
     head_length, head_radius, shaft_radius = 0.2 * options.arrow_length, 0.06 * options.arrow_length, 0.02 * options.arrow_length
     for site in mechanism.clearance_sites:
         size = sizes[site.name]
+        law_type = size.joint_type
         base = f"{ROOT}/clearance/{site.name}"
-        if site.kind == "spherical":
-            vis[f"{base}/outer/socket"].set_object(mg.Sphere(size.inner_radius + k * size.clearance), _material(mg, OUTER_COLOR, 0.3))
-            vis[f"{base}/inner/ball"].set_object(mg.Sphere(size.inner_radius), _material(mg, INNER_COLOR))
-            marker = 0.12 * size.inner_radius
-        else:
-            bore = size.inner_radius + k * size.clearance
-            wall = max(size.outer_radius - size.inner_radius - size.clearance, 0.1 * size.inner_radius)
-            vertices, faces = _tube_mesh(bore, bore + wall, size.bearing_length)
-            vis[f"{base}/outer/bearing"].set_object(mg.TriangularMeshGeometry(vertices, faces), _material(mg, OUTER_COLOR, 0.4))
-            half = 0.5 * (size.bearing_length + k * size.axial_clearance)
-            thickness = 0.1 * size.bearing_length
-            journal = _shifted(mg.Cylinder, _Z_FROM_Y)
-            vis[f"{base}/inner/journal"].set_object(journal(2 * half + 2 * thickness, size.inner_radius), _material(mg, INNER_COLOR))
-            for name, sign in (("flange_top", 1.0), ("flange_bottom", -1.0)):
-                flange = _shifted(mg.Cylinder, _translation(z=sign * (half + 0.5 * thickness)) @ _Z_FROM_Y)
-                vis[f"{base}/inner/{name}"].set_object(flange(thickness, bore + wall), _material(mg, INNER_COLOR, 0.35))
-            marker = 0.12 * size.inner_radius
-        vis[f"{base}/inner/centre"].set_object(mg.Sphere(marker), _material(mg, TRAIL_COLOR))
-        n_candidates = 1 if site.kind == "spherical" else 4
+        for shape in law_type.drawing(law_type.magnified(size.values, k)):
+            vis[f"{base}/{shape.element}/{shape.name}"].set_object(_meshcat_shape(mg, shape), _shape_material(mg, shape))
+        vis[f"{base}/inner/centre"].set_object(mg.Sphere(0.12 * law_type.inner_radius(size.values)), _material(mg, TRAIL_COLOR))
+        n_candidates = law_type.N_CANDIDATES
         for j in range(n_candidates):
             shaft = _shifted(mg.Cylinder, _translation(y=0.5))
             head = _shifted(mg.Cylinder, _translation(y=-0.5 * head_length))
@@ -589,16 +555,17 @@ def build_scene(vis, mechanism: Mechanism, result: SimulationResult, options: An
             size = sizes[site.name]
             base = f"{ROOT}/clearance/{site.name}"
             outer, inner = data.oMf[site.outer_frame], data.oMf[site.inner_frame]
-            drawn = _exaggerated_inner(outer, inner, site.kind, k)
+            drawn = _exaggerated_inner(outer, inner, size.joint_type.EXAGGERATE_TILT, k)
             trails[site.name].append(k * outer.rotation.T @ (inner.translation - outer.translation))
             for part, pose in (("outer", outer), ("inner", drawn)):
                 frame[f"{base}/{part}"].set_transform(pose.homogeneous)
                 if index == 0:
                     vis[f"{base}/{part}"].set_transform(pose.homogeneous)
-            contacts = _law_contacts(laws[site.name], outer, drawn) or _contacts(site.kind, size, outer, drawn, k)
-            for j, (point, direction) in enumerate(contacts):
+            contacts = _law_contacts(laws[site.name], outer, drawn)
+            for j in range(size.joint_type.N_CANDIDATES):
+                point, direction = contacts[j] if contacts else (outer.translation, outer.rotation[:, 2])
                 force = float(frames.normal_force[site.name][index, j])
-                on = force > 0.0 and force_scale > 0.0
+                on = force > 0.0 and force_scale > 0.0 and contacts is not None
                 shaft, head = frame[f"{base}/force{j}/shaft"], frame[f"{base}/force{j}/head"]
                 if on or index == 0:  # a hidden arrow needs no pose: keys only while visible keep files small
                     length = options.arrow_length * force / force_scale if on else 0.0
@@ -656,7 +623,8 @@ def _set_view(vis, mechanism: Mechanism, q0: np.ndarray, sizes: Mapping[str, Ele
         site = mechanism.site(focus)
         centre = np.array(data.oMf[site.outer_frame].translation)
         size = sizes[focus]
-        radius = 4.0 * max(size.inner_radius, size.outer_radius, 0.5 * size.bearing_length, 0.01)
+        shapes = size.joint_type.drawing(size.values)
+        radius = 4.0 * max([s.extent for s in shapes] + [size.joint_type.inner_radius(size.values), 0.01])
         axis = data.oMf[site.outer_frame].rotation[:, 2]
         if site.kind == "revolute":  # look across the bearing rather than along it
             direction = direction - 0.85 * (direction @ axis) * axis

@@ -204,11 +204,7 @@ def hidden_contact_map(
 
 
 def _clearances(run: Run) -> list[float]:
-    values = []
-    for contact in run.dynamics.contacts:
-        law = contact.law
-        values += [law.clearance] if law.n_candidates == 1 else [law.radial_clearance, law.axial_clearance]
-    return values
+    return [float(c) for contact in run.dynamics.contacts for c in contact.law.candidate_clearances()]
 
 
 # --------------------------------------------------------------------------------------
