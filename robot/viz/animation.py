@@ -53,10 +53,10 @@ import pinocchio as pin
 from robot.io.atomic import atomic_write
 from robot.errors import ResultFileError, RobotError
 from robot.model.mechanism import Mechanism, build_mechanism, rotation_z_to
+from robot.data import shipped_urdf, shipped_urdf_dir
 from robot.io.results import SimulationResult, load_result, mechanism_fingerprint
 
-REPO_ROOT = Path(__file__).resolve().parents[2]
-URDF_DIR = REPO_ROOT / "urdf"
+URDF_DIR = shipped_urdf_dir()
 
 # the geometry the shipped scenes use, when neither the result nor its scene gives it
 DEFAULT_SIZES = {
@@ -186,7 +186,7 @@ def load_for_animation(
         name = metadata.get("mechanism")
         if not isinstance(name, str) or not name:
             raise ResultFileError(f"{label} does not name its mechanism file (metadata 'mechanism'); pass the URDF explicitly (--urdf)")
-        urdf = URDF_DIR / Path(name).name
+        urdf = shipped_urdf(name)
     urdf = Path(urdf)
     if not urdf.is_file():
         raise ResultFileError(f"{label} needs the mechanism file {str(urdf)!r}, which does not exist; pass the URDF explicitly (--urdf)")
@@ -218,6 +218,8 @@ def _clearance_choice(metadata: Mapping[str, Any], label: str) -> dict[str, str]
 
 def _check_arrays(mechanism: Mechanism, result: SimulationResult, label: str) -> None:
     arrays = result.arrays
+    if "q" not in arrays:
+        raise ResultFileError(f"{label} was saved without the array 'q' (the scene's [output] keep); rerun keeping \"q\" to animate it")
     t, q = np.asarray(arrays["t"]), np.asarray(arrays["q"])
     n = t.shape[0] if t.ndim == 1 else -1
     if n < 1:
