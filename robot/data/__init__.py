@@ -18,11 +18,8 @@ CHECKOUT_URDF_DIR = Path(__file__).resolve().parents[2] / "urdf"
 
 def shipped_urdf_dir() -> Path:
     """The folder of the shipped mechanism files (installed package data, or the checkout's ``urdf/``)."""
-    try:
-        installed = Path(str(importlib.resources.files("robot.data.urdf")))
-    except (ModuleNotFoundError, TypeError):
-        installed = None
-    if installed is not None and installed.is_dir() and any(installed.glob("*.urdf")):
+    installed = Path(str(importlib.resources.files(__name__) / "urdf"))
+    if installed.is_dir() and any(installed.glob("*.urdf")):
         return installed
     return CHECKOUT_URDF_DIR
 
