@@ -1,8 +1,9 @@
 """Speed against accuracy of every integrator on offer, failure boundaries, RHS speed.
 
-    clearance work-precision [--scene NAME] [--t-end T] [--out DIR]
-        [--quick] [--skip-stability] [--skip-sweep] [--realtime-t-end T] [--realtime-repeats N] [--methods M1,M2]
-        [--tolerances R1,R2] [--steps H1,H2] [--max-step H] [--candidates M:RTOL[:JACOBIAN],...] [--long-horizon]
+examples:
+  clearance work-precision --scene compound_misaligned           # the full study (tens of minutes)
+  clearance work-precision --scene compound --quick --skip-stability
+  clearance work-precision --scene ideal --methods RK45,LSODA --tolerances 1e-6,1e-8 --realtime-t-end 0
 
 Writes to DIR (default results/work_precision/SCENE):
 
