@@ -328,14 +328,14 @@ def _clearance(table: Any, index: int, materials: dict[str, Material], where: st
     try:
         friction = _friction(table.get("friction"), f"{w} friction")
         if kind == "spherical":
-            ball = _number(table, "ball_radius", w, required=True)
-            clearance = _number(table, "clearance", w, required=True)
+            ball = _number(table, "ball_radius", w, required=True, low=0.0, low_open=True)
+            clearance = _number(table, "clearance", w, required=True, low=0.0, low_open=True)
             law = SphericalClearanceJoint(
                 ball, ball + clearance, inner, outer, restitution, _number(table, "exponent", w, 1.5), friction, _number(table, "stiffness", w)
             )
         else:
-            journal = _number(table, "journal_radius", w, required=True)
-            bearing_length = _number(table, "bearing_length", w, required=True)
+            journal = _number(table, "journal_radius", w, required=True, low=0.0, low_open=True)
+            bearing_length = _number(table, "bearing_length", w, required=True, low=0.0, low_open=True)
             optional = {
                 key: _number(table, key, w)
                 for key in ("radial_exponent", "axial_exponent", "point_exponent", "radial_stiffness", "axial_stiffness", "point_stiffness")
@@ -343,9 +343,9 @@ def _clearance(table: Any, index: int, materials: dict[str, Material], where: st
             }
             law = RevoluteClearanceJoint(
                 journal_radius=journal,
-                bearing_inner_radius=journal + _number(table, "radial_clearance", w, required=True),
-                bearing_outer_radius=_number(table, "bearing_outer_radius", w, required=True),
-                journal_length=bearing_length + _number(table, "axial_clearance", w, required=True),
+                bearing_inner_radius=journal + _number(table, "radial_clearance", w, required=True, low=0.0, low_open=True),
+                bearing_outer_radius=_number(table, "bearing_outer_radius", w, required=True, low=0.0, low_open=True),
+                journal_length=bearing_length + _number(table, "axial_clearance", w, required=True, low=0.0, low_open=True),
                 bearing_length=bearing_length,
                 journal_material=inner,
                 bearing_material=outer,
