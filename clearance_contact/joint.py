@@ -328,6 +328,21 @@ class ClearanceJoint:
         arrays["friction_force"][i] = np.linalg.norm(contact.friction_force, axis=1)
         arrays["kind"][i] = contact.kind
 
+    def record_outputs(self, arrays: dict[str, np.ndarray], rows: np.ndarray, outputs: np.ndarray) -> None:
+        """Write the records ``rows`` of :meth:`result_arrays` from the kernel's flat outputs (m, ``output_size``).
+
+        The same values as :meth:`record` of ``JointContact.from_output(self, outputs[j])`` for
+        each row, in a few vectorised operations (the simulator's compiled outputs).
+        """
+        k, r = self.N_CANDIDATES, self.N_ECCENTRICITY
+        m = outputs.shape[0]
+        vectors = outputs[:, self.NORMAL : self.NORMAL + 3 * (4 * k + r)].reshape(m, -1, 3)
+        arrays["eccentricity"][rows] = vectors[:, 4 * k : 4 * k + r].reshape(m, *self.eccentricity_shape)
+        arrays["penetration"][rows] = outputs[:, self.PENETRATION : self.PENETRATION + k]
+        arrays["normal_force"][rows] = outputs[:, self.NORMAL_FORCE : self.NORMAL_FORCE + k]
+        arrays["friction_force"][rows] = np.linalg.norm(vectors[:, 3 * k : 4 * k], axis=2)
+        arrays["kind"][rows] = outputs[:, self.KIND : self.KIND + k].astype(np.int64)
+
     # -- drawing -----------------------------------------------------------------------
     @classmethod
     def magnified(cls, geometry: Mapping[str, float], factor: float) -> dict[str, float]:

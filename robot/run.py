@@ -21,7 +21,7 @@ from robot.model.initial_state import initial_state
 from robot.model.mechanism import Mechanism, build_mechanism
 from robot.model.platform_kinematics import PlatformLayout, inverse_kinematics
 from robot.io.results import Result, make_result, mechanism_fingerprint
-from robot.scene.loader import Scene, load_scene, misalignment_rotation
+from robot.scene.loader import OutputSpec, Scene, load_scene, misalignment_rotation
 from robot.integration.simulation import integrate
 from robot.model.trajectory import POSE_COORDINATES, FourierCoordinate, JointTrajectory, PlatformTrajectory, reference_platform_motion
 
@@ -95,8 +95,13 @@ def clearance_geometry(law) -> dict[str, float]:
     return law.geometry
 
 
-def run_scene(run: Run, progress: Callable[[float], None] | None = None) -> Result:
-    """Integrate a built run and compute its outputs (never raises on divergence: see ``status``)."""
+def run_scene(run: Run, progress: Callable[[float], None] | None = None, output: OutputSpec | None = None) -> Result:
+    """Integrate a built run and compute its outputs (never raises on divergence: see ``status``).
+
+    ``output``: compute the outputs only at the records this ``[output]`` selection
+    keeps (e.g. ``run.scene.output``: what the result file holds, without the ends
+    of the integration steps); None: at every record.
+    """
     scene = run.scene
     trajectory = integrate(run.dynamics, run.y0, run.t_span, scene.solver, scene.limits, progress)
     metadata = {
@@ -120,7 +125,7 @@ def run_scene(run: Run, progress: Callable[[float], None] | None = None) -> Resu
         "nq": run.mechanism.model.nq,
         "nv": run.mechanism.model.nv,
     }
-    return make_result(scene.name, run.dynamics, trajectory, metadata)
+    return make_result(scene.name, run.dynamics, trajectory, metadata, output)
 
 
 def simulate(

@@ -15,6 +15,7 @@ COMMANDS: dict[str, str] = {
     "validate": "robot.cli.validate",
     "describe": "robot.cli.describe",
     "bench": "robot.cli.bench",
+    "bench-run": "robot.cli.bench_run",
     "work-precision": "robot.cli.work_precision",
     "build-urdf": "robot.cli.build_urdf",
 }
@@ -27,6 +28,7 @@ SUMMARIES: dict[str, str] = {
     "validate": "cross-check the model against Newton-Euler and Exudyn",
     "describe": "print a mechanism's bodies, joints, closures, mobility and mass",
     "bench": "microseconds per clearance-joint contact evaluation",
+    "bench-run": "CPU time of each phase of a whole run, against the floor (JSON and a table)",
     "work-precision": "speed against accuracy of every integrator, stability maps",
     "build-urdf": "regenerate urdf/ups_rps.urdf from the design parameters",
 }

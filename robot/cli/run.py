@@ -48,7 +48,8 @@ def execute(args: argparse.Namespace) -> int:
         if stops.requested:
             return EXIT_INTERRUPTED
         with progress_bar(run.scene.duration, run.scene.name) as update:
-            result = run_scene(run, progress=update)
+            # outputs only at the records the file keeps (robot.io.results.kept_rows)
+            result = run_scene(run, progress=update, output=run.scene.output)
         result.counts["compile_cpu_time"] = compile_time
         stops.phase = Phase.SAVING
         path, where_asked = save_or_fallback(result, path, run.scene.output)

@@ -1,8 +1,10 @@
 """Simulation results: derived outputs, the result object and the ``.npz`` result file.
 
 :func:`compute_outputs` evaluates the equations of motion once more at every
-recorded state (integration steps, contact onsets and penetration maxima) and
-returns the arrays users look at. :class:`Result` holds them with the run's
+recorded state (integration steps, contact onsets and penetration maxima), or
+only at those a scene's ``[output]`` table keeps, and returns the arrays users
+look at (:mod:`robot.io.record_outputs`: through the compiled right-hand side
+where it applies). :class:`Result` holds them with the run's
 status, message and counts (like ``scipy.integrate.solve_ivp``'s ``OdeResult``),
 in memory and loaded from a file alike.
 :func:`save_result` writes one ``.npz`` atomically; :func:`load_result` reads it
@@ -65,11 +67,11 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-import pinocchio as pin
 
 from robot.dynamics import equations as D
 from robot.io.array_names import ALWAYS_KEPT, is_bulk
 from robot.io.atomic import atomic_write
+from robot.io.record_outputs import derived_outputs
 from robot.errors import ResultFileError
 from robot.integration.simulation import RECORD_FORCE_PEAK, RECORD_ONSET, RECORD_OUTPUT, RECORD_PEAK, RECORD_STEP, Trajectory
 from robot.scene.loader import OutputSpec
@@ -77,7 +79,6 @@ from robot.scene.loader import OutputSpec
 FORMAT_VERSION = 1
 #: event log kind -> the record kind it wrote (``event_kind``)
 _EVENT_KINDS = {"onset": RECORD_ONSET, "peak": RECORD_PEAK, "force_peak": RECORD_FORCE_PEAK}
-LWA = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
 
 
 class JointSeries:
@@ -198,64 +199,53 @@ class Result:
 SimulationResult = Result
 
 
-def compute_outputs(dynamics: D.DynamicsModel, trajectory: Trajectory) -> dict[str, np.ndarray]:
-    """Evaluate every recorded state; arrays sorted by time (events are interleaved)."""
-    mechanism = dynamics.mechanism
-    model = mechanism.model
-    workspace = D.make_workspace(dynamics)
-    data = workspace.data
+def kept_rows(kind: np.ndarray, output: OutputSpec | None) -> np.ndarray | None:
+    """The records a scene's ``[output]`` table keeps (bool mask over time-sorted records), None for all.
+
+    With an output grid (``output.step``, when the run recorded it: record kind 4
+    present) the ends of integration steps are dropped; the grid, every located
+    record (start, onsets, penetration and force maxima) and the last record
+    (where a failed run stopped) stay.
+    """
+    if output is None or output.step is None or not np.any(kind == RECORD_OUTPUT):
+        return None
+    rows = kind != RECORD_STEP
+    rows[-1] = True
+    return rows
+
+
+def compute_outputs(dynamics: D.DynamicsModel, trajectory: Trajectory, output: OutputSpec | None = None) -> dict[str, np.ndarray]:
+    """Evaluate the recorded states; arrays sorted by time (events are interleaved).
+
+    ``output``: evaluate only the records this ``[output]`` selection keeps
+    (:func:`kept_rows`; what the result file will hold), None: every record. The
+    derived arrays come from :func:`robot.io.record_outputs.derived_outputs`.
+    """
+    nq, nv = dynamics.nq, dynamics.nv
     order = np.argsort(trajectory.t, kind="stable")
+    rows = kept_rows(trajectory.kind[order], output)
+    if rows is not None:
+        order = order[rows]
     t = trajectory.t[order]
     y = trajectory.y[order]
     onset = trajectory.onset_rates[order]
-    n, nq, nv = len(t), dynamics.nq, dynamics.nv
-    q_all, v_all = y[:, :nq], y[:, nq : nq + nv]
     out: dict[str, np.ndarray] = {
         "t": t,
-        "q": q_all,
-        "v": v_all,
+        "q": y[:, :nq],
+        "v": y[:, nq : nq + nv],
         "record_kind": trajectory.kind[order],
         "onset_rates": onset,
-        "driving_force": np.empty((n, mechanism.n_actuators)),
-        "ee_position": np.empty((n, 3)),
-        "ee_velocity": np.empty((n, 3)),
-        "ee_acceleration": np.empty((n, 3)),
-        "constraint_residual": np.empty(n),
-        "kinetic_energy": np.empty(n),
-        "potential_energy": np.empty(n),
-        "actuator_power": np.empty(n),
-        "contact_power": np.empty(n),
         "actuator_work": y[:, nq + nv],
         "contact_work": y[:, nq + nv + 1],
     }
-    # per clearance joint: the arrays its type records (clearance_contact.ClearanceJoint.result_arrays)
-    per_site = {contact.site.name: contact.law.result_arrays(n) for contact in dynamics.contacts}
-    ee = dynamics.end_effector_frame
-    act = mechanism.actuator_v_index
-    for i in range(n):
-        q = D.normalise_quaternions(mechanism, q_all[i])
-        v = v_all[i]
-        evaluation = D.evaluate(dynamics, workspace, float(t[i]), q, v, onset[i])
-        force = evaluation.driving_force(dynamics.constraints)
-        out["driving_force"][i] = force
-        out["constraint_residual"][i] = np.max(np.abs(evaluation.residual)) if evaluation.residual.size else 0.0
-        out["actuator_power"][i] = force @ v[act]
-        out["contact_power"][i] = evaluation.generalized_contact_force @ v
-        pin.forwardKinematics(model, data, q, v, evaluation.qdd)
-        pin.updateFramePlacements(model, data)
-        out["ee_position"][i] = data.oMf[ee].translation
-        out["ee_velocity"][i] = pin.getFrameVelocity(model, data, ee, LWA).linear
-        out["ee_acceleration"][i] = pin.getFrameClassicalAcceleration(model, data, ee, LWA).linear
-        out["kinetic_energy"][i], out["potential_energy"][i] = D.energy(dynamics, workspace, q, v)
-        for contact, result in zip(dynamics.contacts, evaluation.contacts):
-            contact.law.record(per_site[contact.site.name], i, result)
-    for name, arrays in per_site.items():
-        for key, value in arrays.items():
-            out[f"{name}_{key}"] = value
+    out.update(derived_outputs(dynamics, t, y, onset))
     return out
 
 
-def make_result(scene_name: str, dynamics: D.DynamicsModel, trajectory: Trajectory, metadata: dict[str, Any]) -> Result:
+def make_result(
+    scene_name: str, dynamics: D.DynamicsModel, trajectory: Trajectory, metadata: dict[str, Any], output: OutputSpec | None = None
+) -> Result:
+    """The :class:`Result` of a trajectory (``output``: evaluate only the records it keeps, :func:`compute_outputs`)."""
     counts = {
         "n_steps": trajectory.n_steps,
         "n_rejected": trajectory.n_rejected,
@@ -266,7 +256,7 @@ def make_result(scene_name: str, dynamics: D.DynamicsModel, trajectory: Trajecto
         "cpu_time": trajectory.cpu_time,
         "wall_time": trajectory.wall_time,
     }
-    arrays = compute_outputs(dynamics, trajectory)
+    arrays = compute_outputs(dynamics, trajectory, output)
     if trajectory.events:
         arrays["event_t"] = np.array([e[0] for e in trajectory.events])
         arrays["event_candidate"] = np.array([e[1] for e in trajectory.events], dtype=int)
@@ -288,10 +278,7 @@ def select_records(result: Result, output: OutputSpec) -> Result:
     """
     kind = result.arrays["record_kind"]
     n = kind.shape[0]
-    rows = None
-    if output.step is not None and np.any(kind == RECORD_OUTPUT):
-        rows = kind != RECORD_STEP
-        rows[-1] = True
+    rows = kept_rows(kind, output)
     wanted = None if output.keep is None else set(output.keep) | set(ALWAYS_KEPT)
     arrays = {}
     for key, value in result.arrays.items():

@@ -1,0 +1,49 @@
+"""Time each phase of ``clearance run --scene NAME`` over repeated fresh processes; JSON and a table.
+
+examples:
+  clearance bench-run                                       # compound_misaligned, 5 repeats, results/bench_run.json
+  clearance bench-run --scene revolute --repeats 7 --out /tmp/bench_run.json
+
+Per repeat, the command itself in a fresh process (wall time, CPU time, peak
+memory) and a worker process that does what the command does and times each
+phase in CPU seconds (imports, build, compile, integrate, outputs, write), then
+the step loop's parts (right-hand side, Jacobian, probe, solver step, onset and
+peak location, ...) and the floor: the right-hand side plus the Jacobian replayed
+at the run's states, times the run's counts of calls. Medians over the repeats
+(CPU time is robust on a shared machine; wall time is not). Writes OUT (JSON,
+atomically) and OUT with the suffix .md (the table), prints the table.
+The measurement is robot.analysis.studies.run_phases.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from pathlib import Path
+
+from robot.cli.common import EXIT_OK, positive_int, writable_file
+
+DEFAULT_OUT = Path("results") / "bench_run.json"
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("--scene", default="compound_misaligned", help="shipped scene name or path to a .toml file (default: compound_misaligned)")
+    parser.add_argument("--repeats", type=positive_int, default=5, help="fresh-process runs of each measurement (default: 5)")
+    parser.add_argument("--out", type=Path, default=DEFAULT_OUT, help=f"JSON report (default: {DEFAULT_OUT}); the table beside it (.md)")
+
+
+def execute(args: argparse.Namespace) -> int:
+    from robot.analysis.studies.run_phases import benchmark, table
+    from robot.io.atomic import atomic_write_text
+    from robot.scene.loader import load_scene
+
+    load_scene(args.scene)  # a bad scene is bad input (exit 2) before any process is started
+    out = writable_file(args.out, "--out")
+    report = benchmark(str(args.scene), args.repeats, progress=lambda line: print(line, file=sys.stderr, flush=True))
+    report["table"] = table(report)
+    atomic_write_text(out, json.dumps(report, indent=1))
+    atomic_write_text(out.with_suffix(".md"), report["table"] + "\n")
+    print(report["table"])
+    print(f"wrote {out} and {out.with_suffix('.md')}")
+    return EXIT_OK

@@ -1,0 +1,90 @@
+"""The result arrays through the compiled right-hand side equal the reference evaluation at every record.
+
+:func:`robot.io.record_outputs.compiled_outputs` reads the outputs off the
+integrator's compiled right-hand side; :func:`reference_outputs` evaluates the
+equations in Python (``robot.dynamics.equations.evaluate``, every contact law's
+``evaluate``). Two independent compositions of the same equations: they must
+agree to rounding (1e-12 of each array's scale) on runs with contact (spherical,
+revolute with misalignment, both), an ideal mechanism, and parameters the shipped
+scenes do not use. Also: evaluating only the records a scene's ``[output]`` keeps
+gives exactly the rows the file would keep of the full evaluation.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from robot.integration.simulation import RECORD_ONSET, RECORD_OUTPUT, integrate
+from robot.io import record_outputs as RO
+from robot.io.results import make_result, select_records
+from robot.run import build_run
+from robot.scene.loader import OutputSpec
+
+CASES = {
+    "compound_misaligned": ("compound_misaligned", {}, 0.04),
+    "revolute": ("revolute", {}, 0.04),
+    "spherical": ("spherical", {}, 0.04),
+    "ideal": ("ideal", {}, 0.01),
+    # parameters away from the shipped ones: larger clearances, softer restitution, another ball
+    "other parameters": (
+        "compound",
+        {"clearance.R1.radial_clearance": 2.5e-4, "clearance.S1.clearance": 3e-4, "clearance.S1.ball_radius": 0.011, "clearance.R1.restitution": 0.5},
+        0.04,
+    ),
+}
+
+
+def _records(scene: str, overrides: dict, t_end: float):
+    run = build_run(scene, duration=t_end, **overrides)
+    trajectory = integrate(run.dynamics, run.y0, run.t_span, run.scene.solver, run.scene.limits)
+    assert trajectory.success, trajectory.message
+    order = np.argsort(trajectory.t, kind="stable")
+    return run, trajectory, (trajectory.t[order], trajectory.y[order], trajectory.onset_rates[order])
+
+
+@pytest.mark.parametrize("case", list(CASES))
+def test_compiled_outputs_equal_the_reference_evaluation(case):
+    run, trajectory, records = _records(*CASES[case])
+    dynamics = run.dynamics
+    assert RO.compiled_applies(dynamics, RO.D.make_workspace(dynamics))
+    reference = RO.reference_outputs(dynamics, *records)
+    compiled = RO.compiled_outputs(dynamics, *records)
+    assert sorted(compiled) == sorted(reference)
+    if dynamics.contacts:
+        # the comparison means something only if the run has impacts
+        assert np.any(trajectory.kind == RECORD_ONSET)
+        assert max(np.max(reference[f"{c.site.name}_normal_force"]) for c in dynamics.contacts) > 100.0
+    for key, expected in reference.items():
+        got = compiled[key]
+        assert got.shape == expected.shape and got.dtype == expected.dtype, key
+        if expected.dtype.kind in "iub":
+            assert np.array_equal(got, expected), key
+            continue
+        scale = max(float(np.max(np.abs(expected))), 1e-300)
+        assert np.max(np.abs(got - expected)) <= 1e-12 * scale, (key, np.max(np.abs(got - expected)), scale)
+
+
+def test_outputs_at_the_kept_records_are_the_kept_rows_of_all_outputs():
+    run, trajectory, _ = _records("compound_misaligned", {}, 0.03)
+    output = OutputSpec(step=1e-3, precision="float64")
+    assert np.any(trajectory.kind == RECORD_OUTPUT)  # the scene records its output grid
+    full = make_result("x", run.dynamics, trajectory, {})
+    kept = make_result("x", run.dynamics, trajectory, {}, output)
+    selected = select_records(full, output)
+    assert len(kept.arrays["t"]) < len(full.arrays["t"])
+    assert sorted(kept.arrays) == sorted(selected.arrays)
+    for key, value in selected.arrays.items():
+        assert np.array_equal(kept.arrays[key], value), key
+    # and the thinned result is already what the file keeps
+    again = select_records(kept, output)
+    for key, value in again.arrays.items():
+        assert np.array_equal(kept.arrays[key], value), key
+
+
+def test_compiled_outputs_refuse_a_model_without_compiled_right_hand_side():
+    run, _, records = _records("compound", {}, 1e-4)
+    workspace = RO.D.make_workspace(run.dynamics)
+    workspace.compiled = None
+    with pytest.raises(ValueError, match="compiled right-hand side"):
+        RO.compiled_outputs(run.dynamics, *records, workspace=workspace)
