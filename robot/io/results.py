@@ -71,6 +71,7 @@ import numpy as np
 from robot.dynamics import equations as D
 from robot.io.array_names import ALWAYS_KEPT, is_bulk
 from robot.io.atomic import atomic_write
+from robot.io.npz_writer import write_npz
 from robot.io.record_outputs import derived_outputs
 from robot.errors import ResultFileError
 from robot.integration.simulation import RECORD_FORCE_PEAK, RECORD_ONSET, RECORD_OUTPUT, RECORD_PEAK, RECORD_STEP, Trajectory
@@ -294,7 +295,7 @@ def select_records(result: Result, output: OutputSpec) -> Result:
 
 
 def save_result(result: Result, path: str | Path, output: OutputSpec | None = None) -> Path:
-    """Write the result as one ``.npz`` file, atomically (header as JSON in ``__meta__``).
+    """Write the result as one ``.npz`` file, atomically (header as JSON in ``__meta__``; :mod:`robot.io.npz_writer`).
 
     ``output``: the scene's ``[output]`` table (:func:`select_records`); ``None`` writes every array as it is.
     """
@@ -317,7 +318,7 @@ def save_result(result: Result, path: str | Path, output: OutputSpec | None = No
 
     def write(tmp: Path) -> None:
         with open(tmp, "wb") as handle:
-            np.savez_compressed(handle, **payload)
+            write_npz(handle, payload)
 
     return atomic_write(path, write)
 
