@@ -257,6 +257,14 @@ class CompiledTerms:
                 row[K.SITE_WRENCH_OUTER], row[K.SITE_WRENCH_INNER] = w_outer, w_inner
                 first_parameter, first_output = first_parameter + parameters.shape[0], first_output + buffer.shape[0]
             self.site_table = table
+            # per candidate: where its penetration, rate and normal force lie in the packed outputs (the probe)
+            gather = np.zeros((self.n_candidates, 3), dtype=np.int64)
+            for contact, row in zip(dynamics.contacts, table):
+                law, first = contact.law, row[K.SITE_OUT]
+                for j in range(law.n_candidates):
+                    candidate = contact.candidates.start + j
+                    gather[candidate] = (first + law.PENETRATION + j, first + law.PENETRATION_RATE + j, first + law.NORMAL_FORCE + j)
+            self.probe_gather = gather
         # per site: candidate slice and views of its law's penetration, rate and normal force outputs
         self.site_outputs = []
         for contact, site in zip(dynamics.contacts, self.sites):
@@ -603,9 +611,7 @@ def _compiled_sites(
             placements, jacobian, v, onset_rates, tau, compiled.site_table, compiled.site_masks, compiled.site_parameters, compiled.site_outputs_buffer, compiled.site_twists
         )
         if code != 0:
-            index = code // 16 - 1
-            site = compiled.sites[index]
-            _raise_contact_error(dynamics, workspace, index, site.twists, onset_rates[site.candidates], t, code % 16)
+            _raise_site_failure(dynamics, workspace, compiled, code, onset_rates, t)
         return
     for index, (law_kernel, parameters, masks, outer, inner, candidates, twists, buffer, w_outer, w_inner) in enumerate(compiled.sites):
         onset = onset_rates[candidates]
@@ -619,6 +625,13 @@ def _compiled_sites(
             if status != 0:
                 _raise_contact_error(dynamics, workspace, index, twists, onset, t, status)
         K.add_site_wrenches(placements, jacobian, masks, outer, inner, buffer, w_outer, w_inner, tau)
+
+
+def _raise_site_failure(dynamics: DynamicsModel, workspace: DynamicsWorkspace, compiled: CompiledTerms, code: int, onset_rates, t: float):
+    """:func:`robot.dynamics.rhs_kernels.all_sites` returned ``code != 0`` (``16 * (site + 1) + status``): raise its error."""
+    index = code // 16 - 1
+    site = compiled.sites[index]
+    _raise_contact_error(dynamics, workspace, index, site.twists, onset_rates[site.candidates], t, code % 16)
 
 
 def _raise_contact_error(dynamics: DynamicsModel, workspace: DynamicsWorkspace, index: int, twists, onset, t: float, status: int):
@@ -657,6 +670,14 @@ def contact_probe(
         if residual:
             worst = K.largest_residual(compiled.placements, compiled.frames_a, compiled.frames_b, q, workspace.drive.values(t), compiled.actuator_q)
         # compiled.tau receives the (unused) J^T w: every right-hand side starts by zeroing it
+        if compiled.fused is not None:
+            code = K.probe_sites(
+                compiled.placements, compiled.jacobian, v, onset_rates, compiled.tau, compiled.site_table, compiled.site_masks,
+                compiled.site_parameters, compiled.site_outputs_buffer, compiled.site_twists, compiled.probe_gather, pen, rate, force,
+            )  # fmt: skip
+            if code != 0:
+                _raise_site_failure(dynamics, workspace, compiled, code, onset_rates, t)
+            return Probe(pen, rate, worst, force)
         _compiled_sites(dynamics, workspace, compiled, t, v, onset_rates, compiled.tau)
         for candidates, penetration, penetration_rate, normal_force in compiled.site_outputs:
             pen[candidates] = penetration

@@ -309,3 +309,21 @@ def all_sites(placements, J, v, onset_rates, tau, table, masks, parameters, outp
             return 16 * (i + 1) + status
         add_site_wrenches(placements, J, masks[i], outer, inner, out, table[i, SITE_WRENCH_OUTER], table[i, SITE_WRENCH_INNER], tau)
     return 0
+
+
+@jit
+def probe_sites(placements, J, v, onset_rates, tau, table, masks, parameters, outputs, twists, gather, penetration, penetration_rate, normal_force):
+    """:func:`all_sites`, then every candidate's penetration, its rate and normal force (the step loop's probe, one call).
+
+    ``gather`` (n_candidates, 3) int64: per candidate the indices of its
+    penetration, penetration rate and normal force in ``outputs``. Returns
+    :func:`all_sites`' code (the three arrays are then not written).
+    """
+    code = all_sites(placements, J, v, onset_rates, tau, table, masks, parameters, outputs, twists)
+    if code != 0:
+        return code
+    for j in range(gather.shape[0]):
+        penetration[j] = outputs[gather[j, 0]]
+        penetration_rate[j] = outputs[gather[j, 1]]
+        normal_force[j] = outputs[gather[j, 2]]
+    return 0

@@ -39,6 +39,7 @@ import numpy as np
 from scipy.integrate import OdeSolver
 from scipy.integrate._ivp.base import DenseOutput
 
+from robot.integration import cvode_direct
 from robot.integration import methods as registry
 from robot.integration.dense import HermiteDense
 # the old trait tables, as live views of the registry (robot.integration.methods)
@@ -302,7 +303,7 @@ except ImportError:  # pragma: no cover - depends on the environment
 
 
 class _CVODEDense(DenseOutput):
-    """CVODE's own interpolant of the last step (``CVodeGetDky`` through ``step(t)``)."""
+    """CVODE's own interpolant of the last step (``CVodeGetDky``; through ``step(t)`` with scikit-sundae's binding)."""
 
     def __init__(self, t_old, t, solver):
         super().__init__(t_old, t)
@@ -313,6 +314,9 @@ class _CVODEDense(DenseOutput):
     def _one(self, t):
         if t == self.t_end:
             return self.y_end.copy()
+        direct = self.solver._direct
+        if direct is not None:
+            return direct.interpolate(float(t))
         result = self.solver._cvode.step(float(t))
         if result.status < 0:
             raise RuntimeError(f"CVODE interpolation at t={t!r}: {result.message}")
@@ -325,7 +329,12 @@ class _CVODEDense(DenseOutput):
 
 
 class _CVODEBase(OdeSolver):
-    """SUNDIALS CVODE stepped one internal step at a time (``onestep`` with ``tstop``)."""
+    """SUNDIALS CVODE stepped one internal step at a time (``onestep`` with ``tstop``).
+
+    Driven through CVODE's C interface (:mod:`robot.integration.cvode_direct`) where
+    the libraries scikit-sundae ships can be loaded, else through scikit-sundae's
+    binding; the same library with the same options either way (the same steps).
+    """
 
     cvode_method = "BDF"
     min_step = 1e-12
@@ -353,8 +362,15 @@ class _CVODEBase(OdeSolver):
         )
         if first_step is not None:
             options["first_step"] = float(first_step)
+        self.failure_cause = None
+        self._direct = self._cvode = None
+        if cvode_direct.available():
+            # CVODE's dense matrix is filled in place (``jac(t, y, out)``)
+            self._direct = cvode_direct.DirectCVODE(
+                rhsfn, float(t0), np.asarray(y0, dtype=float), jacobian=jac, stop_time=float(t_bound), **options
+            )
+            return
         if jac is not None:
-            # CVODE's dense matrix, filled in place (``jac(t, y, out)``)
             def jacfn(t, y, yp, matrix):
                 jac(t, y, matrix)
 
@@ -363,9 +379,27 @@ class _CVODEBase(OdeSolver):
         result = self._cvode.init_step(float(t0), np.asarray(y0, dtype=float))
         if result.status < 0:
             raise ValueError(f"CVODE initialisation failed: {result.message}")
-        self.failure_cause = None
+
+    @property
+    def njev(self) -> int:
+        """Jacobians evaluated so far (CVODE's count)."""
+        direct = self.__dict__.get("_direct")
+        return direct.n_jacobians if direct is not None else self.__dict__.get("_njev", 0)
+
+    @njev.setter
+    def njev(self, value: int) -> None:  # OdeSolver.__init__ sets 0
+        self._njev = value
 
     def _step_impl(self):
+        direct = self._direct
+        if direct is not None:
+            flag = direct.one_step(self.t_bound)
+            if flag < 0:
+                self.failure_cause = "step size collapse" if flag in cvode_direct.STEP_SIZE_FLAGS else "solver error"
+                return False, f"CVODE: {direct.message(flag)} (flag {flag})"
+            self.t = direct.t
+            self.y = direct.y.copy()
+            return True, None
         for _ in range(3):
             result = self._cvode.step(self.t_bound, method="onestep", tstop=self.t_bound)
             # after an interpolation call (dense output) the first one-step call only returns the
@@ -377,7 +411,7 @@ class _CVODEBase(OdeSolver):
             return False, f"CVODE: {result.message} (flag {result.status})"
         self.t = float(np.ravel(result.t)[-1])
         self.y = np.array(result.y, dtype=float).reshape(-1)
-        self.njev = int(result.njev)
+        self._njev = int(result.njev)
         return True, None
 
     def _dense_output_impl(self):
