@@ -174,7 +174,7 @@ def worker(scene: str, out_dir: str) -> dict:
     timers = ExclusiveTimers()
     timers.wrap(run_module, "integrate", "integrate")
     timers.wrap(run_module, "make_result", "outputs")
-    result = run_module.run_scene(run, progress=lambda t: None)
+    result = run_module.run_scene(run, progress=lambda t: None, output=run.scene.output)  # as the command does
     timers.restore()
     phases["integrate"], phases["outputs"] = timers.spent["integrate"], timers.spent["outputs"]
     start = clock()
