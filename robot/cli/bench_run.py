@@ -3,6 +3,7 @@
 examples:
   clearance bench-run                                       # compound_misaligned, 5 repeats, results/bench_run.json
   clearance bench-run --scene revolute --repeats 7 --out /tmp/bench_run.json
+  clearance bench-run --compare results/bench_run_before.json   # also a before/after table
 
 Per repeat, the command itself in a fresh process (wall time, CPU time, peak
 memory) and a worker process that does what the command does and times each
@@ -22,7 +23,7 @@ import json
 import sys
 from pathlib import Path
 
-from robot.cli.common import EXIT_OK, positive_int, writable_file
+from robot.cli.common import EXIT_OK, UsageError, positive_int, writable_file
 
 DEFAULT_OUT = Path("results") / "bench_run.json"
 
@@ -31,17 +32,26 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--scene", default="compound_misaligned", help="shipped scene name or path to a .toml file (default: compound_misaligned)")
     parser.add_argument("--repeats", type=positive_int, default=5, help="fresh-process runs of each measurement (default: 5)")
     parser.add_argument("--out", type=Path, default=DEFAULT_OUT, help=f"JSON report (default: {DEFAULT_OUT}); the table beside it (.md)")
+    parser.add_argument("--compare", type=Path, default=None, help="an earlier report of this command: add a before/after table")
 
 
 def execute(args: argparse.Namespace) -> int:
-    from robot.analysis.studies.run_phases import benchmark, table
+    from robot.analysis.studies.run_phases import benchmark, comparison_table, table
     from robot.io.atomic import atomic_write_text
     from robot.scene.loader import load_scene
 
     load_scene(args.scene)  # a bad scene is bad input (exit 2) before any process is started
     out = writable_file(args.out, "--out")
+    before = None
+    if args.compare is not None:
+        try:
+            before = json.loads(Path(args.compare).read_text())
+        except (OSError, ValueError) as exc:
+            raise UsageError(f"--compare={str(args.compare)!r} is not a report of this command ({exc})") from None
     report = benchmark(str(args.scene), args.repeats, progress=lambda line: print(line, file=sys.stderr, flush=True))
     report["table"] = table(report)
+    if before is not None:
+        report["table"] += "\n\nbefore / after (medians):\n\n" + comparison_table(before, report)
     atomic_write_text(out, json.dumps(report, indent=1))
     atomic_write_text(out.with_suffix(".md"), report["table"] + "\n")
     print(report["table"])

@@ -305,3 +305,23 @@ def table(report: dict) -> str:
         f"records in memory {phases['records']:.0f}, file {phases['file_bytes'] / 1e6:.2f} MB",
     ]
     return "\n".join(lines)
+
+
+def comparison_table(before: dict, after: dict) -> str:
+    """Two reports of :func:`benchmark` (medians) side by side: CPU seconds per phase and part, and their ratio."""
+    rows = ["| | before | after | after / before |", "|---|---:|---:|---:|"]
+
+    def row(name: str, a: float, b: float, digits: int = 3) -> None:
+        rows.append(f"| {name} | {a:.{digits}f} | {b:.{digits}f} | {b / a if a else float('nan'):.2f} |")
+
+    row("whole process, CPU s", before["process"]["cpu_s"], after["process"]["cpu_s"], 2)
+    row("whole process, wall s (loaded machine)", before["process"]["wall_s"], after["process"]["wall_s"], 2)
+    row("peak memory, MiB", before["process"]["peak_mib"], after["process"]["peak_mib"], 0)
+    for name in RUN_PHASES:
+        row(f"{name}, CPU s", before["phases"]["phases"][name], after["phases"]["phases"][name])
+    parts = sorted(set(before["phases"]["step_loop"]) | set(after["phases"]["step_loop"]), key=lambda p: -before["phases"]["step_loop"].get(p, 0.0))
+    for name in parts:
+        row(f"step loop: {name}", before["phases"]["step_loop"].get(name, 0.0), after["phases"]["step_loop"].get(name, 0.0))
+    row("floor (rhs + Jacobian), CPU s", before["phases"]["floor"]["floor_s"], after["phases"]["floor"]["floor_s"])
+    row("integration / floor", before["phases"]["integration_over_floor"], after["phases"]["integration_over_floor"], 2)
+    return "\n".join(rows)
