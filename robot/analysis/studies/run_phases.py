@@ -154,18 +154,29 @@ def _floor(run, trajectory, sample_every: int = 4) -> dict:
     return {"rhs_us": rhs_cost * 1e6, "jacobian_us": jacobian_cost * 1e6, "n_rhs": trajectory.n_rhs, "n_jacobians": n_jac, "floor_s": floor, "states": len(states)}
 
 
-def worker(scene: str, out_dir: str) -> dict:
-    """One fresh process's measurement (module docstring): run phases, step-loop parts, floor."""
-    phases: dict[str, float] = {}
+#: what the command imports (timed by the worker's launcher before anything else is imported)
+COMMAND_MODULES = ("robot.cli.main", "robot.cli.run", "robot.run", "robot.cli.outputs")
+#: the worker's launcher: times the command's imports first (importing this module loads numpy and numba)
+_LAUNCHER = (
+    "import time, json; start = time.process_time()\n"
+    "for name in {modules!r}: __import__(name)\n"
+    "imports = time.process_time() - start\n"
+    "import robot.analysis.studies.run_phases as m\n"
+    "print(json.dumps(m.worker({scene!r}, {out!r}, imports)))"
+)
+
+
+def worker(scene: str, out_dir: str, imports: float) -> dict:
+    """One fresh process's measurement (module docstring): run phases, step-loop parts, floor.
+
+    ``imports``: CPU seconds of the command's imports, timed by the launcher (:func:`measure_phases`).
+    """
+    phases: dict[str, float] = {"imports": imports}
     clock = time.process_time
-    start = clock()
-    import robot.cli.main  # noqa: F401 - what the command imports
-    import robot.cli.run  # noqa: F401
     from robot.cli.outputs import save_or_fallback
     from robot.run import build_run, compile_kernels
     import robot.run as run_module
 
-    phases["imports"] = clock() - start
     start = clock()
     run = build_run(scene)
     phases["build"] = clock() - start
@@ -239,7 +250,7 @@ def measure_process(scene: str, python: str = sys.executable) -> dict:
 def measure_phases(scene: str, python: str = sys.executable) -> dict:
     """:func:`worker` in a fresh process."""
     with tempfile.TemporaryDirectory(prefix="bench-run-") as out:
-        command = [python, "-c", f"import json, robot.analysis.studies.run_phases as m; print(json.dumps(m.worker({scene!r}, {out!r})))"]
+        command = [python, "-c", _LAUNCHER.format(modules=COMMAND_MODULES, scene=scene, out=out)]
         done = subprocess.run(command, env=_child_env(), capture_output=True, text=True)
     if done.returncode != 0:
         raise RuntimeError(f"phase worker failed ({done.returncode}):\n{done.stderr}")
