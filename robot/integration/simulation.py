@@ -100,7 +100,7 @@ class Trajectory:
     cause: str | None
     t_end: float
     t: np.ndarray
-    y: np.ndarray  # (n, nq + nv + 2): q, v, actuator work, contact work
+    y: np.ndarray  # (n, nq + nv + 3): q, v, actuator work, contact work, force-element work
     onset_rates: np.ndarray  # (n, n_candidates): contact state used at each record
     kind: np.ndarray  # (n,) 0 step, 1 contact onset, 2 penetration maximum, 3 start, 4 output grid, 5 force maximum
     n_steps: int = 0
@@ -191,14 +191,14 @@ def integrate(
             # step's error estimate non-finite, so the solver rejects the step and
             # shrinks it. Accepted states are still checked and a real blow-up is reported.
             workspace.rejected_stages += 1
-            return np.full(nq + nv + 2, np.inf)
+            return np.full(dynamics.state_size, np.inf)
 
     state_jacobian = None
     if options.jacobian == STRUCTURED and options.method in JACOBIAN_METHODS:
         state_jacobian = SJ.for_workspace(dynamics, workspace)
 
     def jacobian(t: float, y: np.ndarray, out: np.ndarray | None = None) -> np.ndarray:
-        out = np.empty((nq + nv + 2, nq + nv + 2)) if out is None else out
+        out = np.empty((dynamics.state_size, dynamics.state_size)) if out is None else out
         try:
             return state_jacobian(t, y, onset, out)
         except (ContactError, np.linalg.LinAlgError):
@@ -233,9 +233,9 @@ def integrate(
     started_cpu, started_wall = time.process_time(), time.perf_counter()
     y0 = np.asarray(y0, dtype=float)
     if y0.shape == (nq + nv,):
-        y0 = np.concatenate([y0, [0.0, 0.0]])  # work accumulators start at zero
-    if y0.shape != (nq + nv + 2,):
-        raise ValueError(f"y0 has shape {y0.shape}; expected ({nq + nv},) or ({nq + nv + 2},) for this model")
+        y0 = np.concatenate([y0, np.zeros(D.N_WORK)])  # work accumulators start at zero
+    if y0.shape != (dynamics.state_size,):
+        raise ValueError(f"y0 has shape {y0.shape}; expected ({nq + nv},) or ({dynamics.state_size},) for this model")
     t, y = t0, _normalised_state(mechanism, y0, nq)
     status, cause, message = SUCCESS, None, "the integration reached the end of the time span"
     try:
@@ -561,7 +561,7 @@ class _ForcePeaks:
         if self.replay_workspace is None:
             self.replay_workspace = D.make_workspace(dynamics)
         workspace = self.replay_workspace
-        size = dynamics.nq + dynamics.nv + 2
+        size = dynamics.state_size
 
         def fun(t, y):
             try:

@@ -20,12 +20,33 @@ Schema (defaults in brackets)::
     end_effector = "platform"            # frame whose motion is reported
     duration = 2.0                       # s
 
-    [trajectory]
+    [trajectory]                         # prescribed motion (none: no table, or type = "joints" and no entries)
     type = "platform"                    # "platform" (pose through IK) or "joints"
     preset = "reference"                 # platform: the reference motion of robot.trajectory
     period = 1.0                         # s
     # platform, instead of preset: x, z, roll, pitch, yaw = {offset, amplitudes, harmonics, phases}
-    # joints: one table per actuated joint: P1 = {offset, rate, amplitudes, harmonics, phases}
+    # joints: one table per motion-driven actuator (rad or m), by `function`:
+    #   P1 = {offset, rate, amplitudes, harmonics, phases}   # no function (or "fourier"): Fourier series of `period`
+    #   P1 = {function = "constant_rate", offset, rate}      # or "constant" {value}, "polynomial" {coefficients}
+    #   P1 = {function = "harmonic", amplitude, frequency, phase, offset}   # Hz, rad
+    #   P1 = {function = "tabulated", file = "motion.csv"}   # CSV: time, value (relative to this file;
+    #        or time = [...], value = [...]); cubic spline: value, rate, acceleration; must cover [0, duration]
+
+    [actuators]        # per actuated joint (default: every URDF <transmission> joint, mode "motion")
+    P1 = {mode = "motion"}               # prescribed motion from [trajectory] (driving constraint)
+    P2 = {mode = "force", function = "harmonic", amplitude = 5.0, frequency = 2.0}  # prescribed
+                                         # generalized force (N, prismatic; N m, revolute), the joint free;
+                                         # function keys as in [trajectory] joints (robot.scene.values)
+    P3 = {mode = "none"}                 # not actuated: the joint is free
+    # any 1-dof joint may be listed (also one without a transmission)
+
+    [[force]]          # force elements (robot.dynamics.forces; one table each, outputs force_<name>)
+    name = "spring"    # unique [<type>_<index>]
+    type = "spring_damper"   # link_a, xyz_a, link_b (or "world"), xyz_b, stiffness + free_length
+                             # or length = [...] + force = [...], damping, actuator_force
+    # "joint_spring_damper": joint, stiffness, rest_position, damping
+    # "joint_torque" (revolute) / "joint_force" (prismatic): joint + a time function (function = ...)
+    # "body_force": link, xyz, direction (world) + a time function; "body_torque": link, axis + function
 
     [solver]   method ["RK45"], rtol [1e-7], atol [1e-9], max_step [1e-3], first_step,
                jacobian ["structured"] (implicit methods' Newton matrix; or "finite-difference")
@@ -79,7 +100,7 @@ from robot.integration.solvers import FIXED_STEP_METHODS, METHODS
 
 SCENE_DIR = Path(__file__).resolve().parent / "scenes"
 
-_TOP_KEYS = {"name", "description", "mechanism", "end_effector", "duration", "trajectory", "solver", "baumgarte", "limits", "materials", "clearance", "initial", "extends"}
+_TOP_KEYS = {"name", "description", "mechanism", "end_effector", "duration", "trajectory", "solver", "baumgarte", "limits", "materials", "clearance", "initial", "extends", "force", "actuators"}
 _SOLVER_KEYS = {"method", "rtol", "atol", "max_step", "first_step", "jacobian"}
 _BAUMGARTE_KEYS = {"alpha", "beta"}
 _LIMIT_KEYS = {"penetration_ratio", "max_residual", "min_step", "max_wall_time"}
@@ -110,6 +131,27 @@ class TrajectorySpec:
     period: float
     preset: str | None
     coordinates: dict[str, dict]
+    #: joints: per joint a time function (robot.model.time_functions) when the table names a `function`
+    functions: dict[str, Any] = field(default_factory=dict)
+
+
+@dataclass(frozen=True)
+class ForceSpec:
+    """A ``[[force]]`` table: its element type (``robot.dynamics.forces.FORCE_TYPES``) and validated parameters."""
+
+    name: str
+    kind: str
+    parameters: dict[str, Any]
+    where: str
+
+
+@dataclass(frozen=True)
+class ActuatorSpec:
+    """How an actuated joint is driven: ``motion`` (trajectory), ``force`` (``function`` of t) or ``none``."""
+
+    joint: str
+    mode: str
+    function: Any = None
 
 
 @dataclass(frozen=True)
@@ -128,6 +170,8 @@ class Scene:
     limits: FailureLimits
     clearances: tuple[ClearanceSpec, ...] = field(default_factory=tuple)
     misalignment_deg: dict[str, float] = field(default_factory=dict)
+    forces: tuple[ForceSpec, ...] = field(default_factory=tuple)
+    actuators: dict[str, ActuatorSpec] = field(default_factory=dict)
     #: the scene's TOML document as resolved (``extends`` merged, overrides applied)
     document: dict[str, Any] = field(default_factory=dict, compare=False, repr=False)
     #: the folder that relative paths of the document are relative to
@@ -315,9 +359,9 @@ def _clearance(table: Any, index: int, materials: dict[str, Material], where: st
     return ClearanceSpec(joint, kind, outer_on, law)
 
 
-def _trajectory(table: dict, where: str) -> TrajectorySpec:
+def _trajectory(table: dict, where: str, base_dir: Path | None = None) -> TrajectorySpec:
     w = f"{where} [trajectory]"
-    kind = table.get("type", "platform")
+    kind = table.get("type", "platform" if table else "joints")  # no table: no prescribed motion
     if kind not in ("platform", "joints"):
         raise SceneError(f"{w}: type={kind!r} must be 'platform' or 'joints'", key="type", value=kind)
     period = _number(table, "period", w, 1.0, low=0.0, low_open=True)
@@ -333,14 +377,94 @@ def _trajectory(table: dict, where: str) -> TrajectorySpec:
             raise SceneError(f"{w}: a platform trajectory needs preset = 'reference' or all of {', '.join(POSE_COORDINATES)}")
     elif preset is not None:
         raise SceneError(f"{w}: preset is only for platform trajectories")
+    functions = {}
     for name, coordinate in coordinates.items():
         if not isinstance(coordinate, dict):
             raise SceneError(f"{w}: {name} must be a table {{offset, rate, amplitudes, harmonics, phases}}")
-        _unknown(coordinate, _COORDINATE_KEYS, f"{w} {name}")
+        if kind == "joints" and coordinate.get("function", "fourier") != "fourier":
+            from robot.scene.values import time_function  # imports this module: import on use
+
+            functions[name] = time_function(coordinate, f"{w} {name}", base_dir)
+            continue
+        _unknown(coordinate, _COORDINATE_KEYS | ({"function"} if kind == "joints" else set()), f"{w} {name}")
         lengths = {len(coordinate.get(k, [])) for k in ("amplitudes", "harmonics", "phases")}
         if len(lengths) > 1:
             raise SceneError(f"{w} {name}: amplitudes, harmonics and phases must have the same length")
-    return TrajectorySpec(kind, period, preset, coordinates)
+    return TrajectorySpec(kind, period, preset, coordinates, functions)
+
+
+def _forces(data: dict, where: str, base_dir: Path) -> tuple[ForceSpec, ...]:
+    """``[[force]]`` tables, each parsed by its registered element type (``robot.dynamics.forces``)."""
+    tables = data.get("force", [])
+    if not isinstance(tables, list):
+        raise SceneError(f"{where}: force must be an array of tables [[force]]", key="force", value=tables)
+    if not tables:
+        return ()
+    from robot.dynamics.forces import FORCE_TYPES  # the element modules import this module: import on use
+
+    specs, names = [], set()
+    for index, table in enumerate(tables):
+        w = f"{where} [[force]] #{index + 1}"
+        if not isinstance(table, dict):
+            raise SceneError(f"{w} must be a table", value=table)
+        kind = table.get("type")
+        if kind not in FORCE_TYPES:
+            raise SceneError(f"{w}: type={kind!r} is not a force element type; types: {', '.join(sorted(FORCE_TYPES))}", key="type", value=kind)
+        name = table.get("name", f"{kind}_{index + 1}")
+        if not isinstance(name, str) or not name.replace("_", "").isalnum() or name in names | {"work", "energy"}:
+            raise SceneError(f"{w}: name={name!r} must be a unique identifier (letters, digits, _)", key="name", value=name)
+        names.add(name)
+        w = f"{where} force {name!r} ({kind})"
+        element = FORCE_TYPES[kind]
+        function_keys = _function_keys(table)
+        if function_keys is not None:  # else the element's parse names the unknown function
+            _unknown(table, element.KEYS | {"name", "type"} | function_keys, w)
+        specs.append(ForceSpec(name, kind, element.parse(table, w, base_dir), w))
+    return tuple(specs)
+
+
+def _function_keys(table: dict) -> set[str] | None:
+    """The keys of the time function a table names; None for an unknown function."""
+    if "function" not in table:
+        return set()
+    from robot.scene.values import FUNCTION_KEYS
+
+    kind = table["function"]
+    return FUNCTION_KEYS[kind] | {"function"} if isinstance(kind, str) and kind in FUNCTION_KEYS else None
+
+
+def _actuators(data: dict, where: str, base_dir: Path) -> dict[str, ActuatorSpec]:
+    """``[actuators]``: per joint ``{mode = "motion" | "force" | "none", function ... (force)}``."""
+    table = _table(data, "actuators", where)
+    out = {}
+    for joint, entry in table.items():
+        w = f"{where} [actuators] {joint}"
+        if not isinstance(entry, dict):
+            raise SceneError(f"{w} must be a table {{mode = 'motion' | 'force' | 'none', ...}}", key=joint, value=entry)
+        mode = entry.get("mode")
+        if mode not in ("motion", "force", "none"):
+            raise SceneError(f"{w}: mode={mode!r} must be 'motion', 'force' or 'none'", key="mode", value=mode)
+        if mode == "force":
+            from robot.scene.values import time_function
+
+            function = time_function({k: v for k, v in entry.items() if k != "mode"}, w, base_dir)
+            out[joint] = ActuatorSpec(joint, mode, function)
+        else:
+            _unknown(entry, {"mode"}, w)
+            out[joint] = ActuatorSpec(joint, mode)
+    return out
+
+
+def _check_time_tables(trajectory: TrajectorySpec, actuators: dict[str, ActuatorSpec], forces: tuple[ForceSpec, ...], duration: float, where: str) -> None:
+    """Every time table covers the run [0, duration]."""
+    from robot.scene.values import check_covers
+
+    for joint, function in trajectory.functions.items():
+        check_covers(function, 0.0, duration, "file", f"{where} [trajectory] {joint}")
+    for joint, actuator in actuators.items():
+        check_covers(actuator.function, 0.0, duration, "time", f"{where} [actuators] {joint}")
+    for spec in forces:
+        check_covers(spec.parameters.get("function"), 0.0, duration, "time", spec.where)
 
 
 def load_scene(name_or_path: str | Path, overrides: Mapping[str, Any] | None = None, **top_level: Any) -> Scene:
@@ -421,6 +545,11 @@ def scene_from_document(data: dict[str, Any], path: Path, base_dir: Path) -> Sce
         if joint not in revolute:
             raise SceneError(f"{where} [initial]: misalignment_deg names {joint!r}, which is not a revolute clearance joint of the scene ({sorted(revolute)})")
         _number(misalignment, joint, f"{where} [initial] misalignment_deg", low=-5.0, high=5.0)
+    duration = _number(data, "duration", where, required=True, low=0.0, low_open=True)
+    trajectory = _trajectory(_table(data, "trajectory", where), where, base_dir)
+    forces, actuators = _forces(data, where, base_dir), _actuators(data, where, base_dir)
+    if trajectory.functions or forces or actuators:
+        _check_time_tables(trajectory, actuators, forces, duration, where)
     end_effector = data.get("end_effector", "platform")
     if not isinstance(end_effector, str):
         raise SceneError(f"{where}: end_effector={end_effector!r} must be a frame name", key="end_effector", value=end_effector)
@@ -430,13 +559,15 @@ def scene_from_document(data: dict[str, Any], path: Path, base_dir: Path) -> Sce
         description=str(data.get("description", "")),
         mechanism_path=mechanism_path,
         end_effector=end_effector,
-        duration=_number(data, "duration", where, required=True, low=0.0, low_open=True),
-        trajectory=_trajectory(_table(data, "trajectory", where), where),
+        duration=duration,
+        trajectory=trajectory,
         solver=solver,
         baumgarte=baumgarte,
         limits=limits,
         clearances=clearances,
         misalignment_deg={k: float(v) for k, v in misalignment.items()},
+        forces=forces,
+        actuators=actuators,
         document=document,
         base_dir=base_dir,
     )
