@@ -61,15 +61,18 @@ def vector3(table: dict, key: str, where: str, default: tuple[float, float, floa
     return vector
 
 
-def table_curve(x: tuple[float, ...], y: tuple[float, ...], x_key: str, y_key: str, where: str) -> TF.Tabulated:
-    """A spline through ``(x, y)``; refused with the offending entry if ``x`` is not strictly increasing."""
+def table_curve(x: tuple[float, ...], y: tuple[float, ...], x_key: str, y_key: str, where: str, source: tuple[str, str] | None = None) -> TF.Tabulated:
+    """A spline through ``(x, y)``; refused with the offending entry if ``x`` is not strictly increasing.
+
+    ``source``: the scene key and value the table came from (a file), named in the error instead.
+    """
     if len(x) != len(y):
-        raise SceneError(f"{where}: {x_key} and {y_key} must have the same length (got {len(x)} and {len(y)})", key=y_key, value=list(y))
+        key, value = source or (y_key, list(y))
+        raise SceneError(f"{where}: {x_key} and {y_key} must have the same length (got {len(x)} and {len(y)})", key=key, value=value)
+    key, value = source or (x_key, list(x))
     bad = TF.first_non_increasing(x)
     if bad is not None:
-        raise SceneError(
-            f"{where}: {x_key} must be strictly increasing; entry {bad} ({x[bad]!r}) follows {x[bad - 1]!r}", key=x_key, value=list(x)
-        )
+        raise SceneError(f"{where}: {x_key} must be strictly increasing; entry {bad} ({x[bad]!r}) follows {x[bad - 1]!r}", key=key, value=value)
     return TF.Tabulated(np.array(x), np.array(y))
 
 
@@ -87,7 +90,7 @@ def _tabulated(table: dict, where: str, base_dir: Path | None) -> TF.Tabulated:
             raise SceneError(f"{where}: file={name!r}: {str(path)!r} does not exist", key="file", value=name) from None
         except (ValueError, UnicodeDecodeError) as exc:
             raise SceneError(f"{where}: file={name!r} is not a two-column CSV table (time, value): {exc}", key="file", value=name) from None
-        return table_curve(tuple(time), tuple(value), f"file={name!r} time column", "value", where)
+        return table_curve(tuple(map(float, time)), tuple(map(float, value)), f"file={name!r}: the time column", "value", where, ("file", name))
     return table_curve(number_list(table, "time", where, min_length=2), number_list(table, "value", where, min_length=2), "time", "value", where)
 
 
