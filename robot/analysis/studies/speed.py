@@ -88,7 +88,7 @@ def sample_states(run: Run, t_end: float = 0.02) -> dict:
     force to speak of.
     """
     dynamics = run.dynamics
-    y0 = np.concatenate([run.y0, [0.0, 0.0]])  # work accumulators start at zero
+    y0 = np.concatenate([run.y0, np.zeros(D.N_WORK)])  # work accumulators start at zero
     states = {"initial": (0.0, y0, initial_onset_rates(dynamics))}
     if not dynamics.contacts:
         return states

@@ -20,28 +20,37 @@ LWA = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
 
 
 class PointKinematics:
-    """Point positions and Jacobians on ``data`` (see the module docstring)."""
+    """Point positions and Jacobians on ``data`` (see the module docstring).
+
+    Per point, the joint's rotation and translation are numpy views into
+    ``data.oMi`` bound on first use (they follow every kinematics update; reading
+    ``data.oMi[j]`` anew costs ~10 us), with the point's ``SE3`` placement.
+    """
 
     def __init__(self, model: pin.Model, data: pin.Data):
         self.model, self.data = model, data
-        self._placements: dict[tuple[int, bytes], pin.SE3] = {}
+        self._bound: dict[tuple[int, bytes], tuple[np.ndarray, np.ndarray, pin.SE3]] = {}
         self._zero = np.zeros((3, model.nv))
+
+    def _views(self, point: BodyPoint) -> tuple[np.ndarray, np.ndarray, pin.SE3]:
+        key = (point.joint, point.offset.tobytes())
+        views = self._bound.get(key)
+        if views is None:
+            placement = self.data.oMi[point.joint]
+            views = self._bound[key] = (placement.rotation, placement.translation, pin.SE3(np.eye(3), point.offset))
+        return views
 
     def position(self, point: BodyPoint) -> np.ndarray:
         if point.joint == 0:
             return point.offset
-        placement = self.data.oMi[point.joint]
-        return placement.rotation @ point.offset + placement.translation
+        rotation, translation, _ = self._views(point)
+        return rotation @ point.offset + translation
 
     def linear_jacobian(self, point: BodyPoint) -> np.ndarray:
         """3 x nv: ``v_p = J v`` (world axes)."""
         if point.joint == 0:
             return self._zero
-        key = (point.joint, point.offset.tobytes())
-        placement = self._placements.get(key)
-        if placement is None:
-            placement = self._placements[key] = pin.SE3(np.eye(3), point.offset)
-        return pin.getFrameJacobian(self.model, self.data, point.joint, placement, LWA)[:3]
+        return pin.getFrameJacobian(self.model, self.data, point.joint, self._views(point)[2], LWA)[:3]
 
     def angular_jacobian(self, joint: int) -> np.ndarray:
         """3 x nv: the angular velocity (world axes) of the body of joint ``joint``."""
