@@ -42,7 +42,7 @@ def states(misaligned):
 
 def _jacobians(run, t, y, onset):
     dynamics = run.dynamics
-    n = dynamics.state_size
+    n = dynamics.nq + dynamics.nv + 2
     structured = SJ.for_workspace(dynamics, D.make_workspace(dynamics))(t, y, onset, np.empty((n, n)))
     workspace = D.make_workspace(dynamics)
     # small steps: a candidate may have just touched (penetration ~1e-9 m)
@@ -168,7 +168,7 @@ def test_a_refused_perturbation_falls_back_to_differences(misaligned, monkeypatc
     trajectory = integrate(misaligned.dynamics, misaligned.y0, (0.0, 0.01), options, misaligned.scene.limits)
     assert trajectory.success, trajectory.message
     assert len(refusals) == len(fallbacks) == trajectory.n_jacobians > 0
-    n = misaligned.dynamics.state_size
+    n = misaligned.dynamics.nq + misaligned.dynamics.nv + 2
     # forward differences from the base value: n + 1 right-hand sides per Jacobian
     assert trajectory.n_rhs >= (n + 1) * trajectory.n_jacobians
     # the fallback is the Jacobian of the right-hand side: d(dq/dt)/dv is the tangent map

@@ -28,8 +28,10 @@ increasing coordinate: N on a prismatic joint, N m about a revolute joint's axis
 (right-hand rule); its power ``driving_force * qd_k`` is positive when the
 actuator does work on the mechanism.
 
-State of the integrator: ``y = [q, v, W_act, W_contact, W_force]`` (``N_WORK``
-work accumulators: actuators, contact, force elements).
+State of the integrator: ``y = [q, v, W_act, W_contact]``, and ``W_force`` after
+them when the model has force elements (``DynamicsModel.n_work`` accumulators:
+actuators, contact, force elements). A model without force elements keeps the
+two-accumulator state, so its error norms and step sequences are unchanged.
 
 Everything per-run lives in :class:`DynamicsWorkspace` (Pinocchio ``Data`` and
 caches); :class:`DynamicsModel` is immutable.
@@ -54,8 +56,6 @@ from robot.model.mechanism import ClearanceSite, Mechanism
 from robot.dynamics.forces.force_set import BoundForces, ForceSet
 
 LWA = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
-#: work accumulators after [q, v] in the state: actuator work, contact work, force-element work
-N_WORK = 3
 
 
 class Drive(Protocol):
@@ -100,9 +100,14 @@ class DynamicsModel:
     forces: ForceSet | None = None  # force elements and force-driven actuators (robot.dynamics.forces)
 
     @property
+    def n_work(self) -> int:
+        """Work accumulators after ``[q, v]``: actuators, contact, and force elements when there are any."""
+        return 2 if self.forces is None else 3
+
+    @property
     def state_size(self) -> int:
-        """Length of the integrator's state ``[q, v, W_act, W_contact, W_force]``."""
-        return self.nq + self.nv + N_WORK
+        """Length of the integrator's state ``[q, v, W_act, W_contact(, W_force)]``."""
+        return self.nq + self.nv + self.n_work
 
     @property
     def n_candidates(self) -> int:
@@ -476,7 +481,7 @@ def state_derivative(
     y: np.ndarray,
     onset_rates: np.ndarray,
 ) -> np.ndarray:
-    """dy/dt of the simulation state ``y = [q, v, W_act, W_contact, W_force]`` (the integrator's right-hand side).
+    """dy/dt of the simulation state ``y = [q, v, W_act, W_contact(, W_force)]`` (the integrator's right-hand side).
 
     The same equations as :func:`evaluate` (plus :func:`configuration_rate` and the
     actuator and contact powers), on the hot path: quaternions normalised in a
@@ -516,7 +521,7 @@ def state_derivative(
                 if tau is None:
                     tau = np.zeros(nv)
                 views.add_generalized_force(model, data, result, tau)
-    out = np.empty(nq + nv + N_WORK)
+    out = np.empty(dynamics.state_size)
     total = workspace.zero_tau if tau is None else tau
     if workspace.forces is not None:
         total = total + workspace.forces.evaluate(t, q, v)
@@ -533,7 +538,6 @@ def _add_force_powers(workspace: DynamicsWorkspace, out: np.ndarray, offset: int
     """Force-driven actuators' power into the actuator power, the elements' power into the force power."""
     forces = workspace.forces
     if forces is None:
-        out[offset + 2] = 0.0
         return
     out[offset] += forces.powers[0]
     out[offset + 2] = forces.powers[1]
@@ -579,7 +583,7 @@ def _compiled_state_derivative(
     tau = compiled.tau
     tau[:] = 0.0
     _compiled_sites(dynamics, workspace, compiled, t, v, onset_rates, tau)
-    out = np.empty(nq + nv + N_WORK)
+    out = np.empty(dynamics.state_size)
     # force elements: data.oMi and data.J are at q (computeJointJacobiansTimeVariation)
     total = tau if workspace.forces is None else tau + workspace.forces.evaluate(t, q, v)
     out[nq : nq + nv] = pin.forwardDynamics(model, data, total, compiled.phi_q, compiled.drift)

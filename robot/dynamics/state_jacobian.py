@@ -80,7 +80,7 @@ class StateJacobian:
     """``df/dy`` of :func:`robot.dynamics.equations.state_derivative` on one workspace (module docstring).
 
     Call ``jacobian(t, y, onset_rates, out)`` to fill ``out`` (n x n, n =
-    nq + nv + 3). Uses (and overwrites) the workspace's Pinocchio data, as a
+    ``dynamics.state_size``). Uses (and overwrites) the workspace's Pinocchio data, as a
     right-hand side call does. Raises ``ContactError`` if a contact law refuses
     a perturbed input (callers fall back to finite differences).
     """

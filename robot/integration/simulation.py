@@ -100,7 +100,7 @@ class Trajectory:
     cause: str | None
     t_end: float
     t: np.ndarray
-    y: np.ndarray  # (n, nq + nv + 3): q, v, actuator work, contact work, force-element work
+    y: np.ndarray  # (n, nq + nv + 2 or 3): q, v, actuator work, contact work(, force-element work)
     onset_rates: np.ndarray  # (n, n_candidates): contact state used at each record
     kind: np.ndarray  # (n,) 0 step, 1 contact onset, 2 penetration maximum, 3 start, 4 output grid, 5 force maximum
     n_steps: int = 0
@@ -233,7 +233,7 @@ def integrate(
     started_cpu, started_wall = time.process_time(), time.perf_counter()
     y0 = np.asarray(y0, dtype=float)
     if y0.shape == (nq + nv,):
-        y0 = np.concatenate([y0, np.zeros(D.N_WORK)])  # work accumulators start at zero
+        y0 = np.concatenate([y0, np.zeros(dynamics.n_work)])  # work accumulators start at zero
     if y0.shape != (dynamics.state_size,):
         raise ValueError(f"y0 has shape {y0.shape}; expected ({nq + nv},) or ({dynamics.state_size},) for this model")
     t, y = t0, _normalised_state(mechanism, y0, nq)

@@ -14,9 +14,9 @@ in the direction of increasing coordinate: the actuator pushes); ``ee_position``
 ``ee_velocity``, ``ee_acceleration`` (n x 3, world, of the end-effector frame
 origin); ``constraint_residual`` (n, max |Phi|); ``kinetic_energy``,
 ``potential_energy``, ``actuator_power``, ``contact_power``, ``actuator_work``,
-``contact_work``, ``force_work`` (n; works integrated with the motion: actuators
-(motion- and force-driven), contact, force elements); with force elements
-(``robot.dynamics.forces``) also ``force_energy`` (n, energy stored in them) and per
+``contact_work`` (n; works integrated with the motion: actuators, motion- and
+force-driven, and contact); with force elements (``robot.dynamics.forces``) also
+``force_work`` (n, their integrated work), ``force_energy`` (n, energy stored in them) and per
 element ``force_NAME`` (n, its scalar force, N, or torque, N m); ``record_kind`` (n, what
 each record is, below); ``onset_rates`` (n x candidates, the Lankarani-Nikravesh
 approach rate in use at each record); per clearance joint
@@ -228,11 +228,11 @@ def compute_outputs(dynamics: D.DynamicsModel, trajectory: Trajectory) -> dict[s
         "contact_power": np.empty(n),
         "actuator_work": y[:, nq + nv],
         "contact_work": y[:, nq + nv + 1],
-        "force_work": y[:, nq + nv + 2],  # work of the force elements (not the force-driven actuators: actuator_work)
     }
-    forces = workspace.forces  # force elements: force_<name> (scalar force or torque), force_energy (stored)
+    forces = workspace.forces  # force elements: force_work, force_energy (stored), force_<name> (scalar force or torque)
     if forces is not None:
         element_scalars, out["force_energy"] = np.empty((n, len(forces.elements))), np.empty(n)
+        out["force_work"] = y[:, nq + nv + 2]  # not the force-driven actuators' work: that is actuator_work
     per_site = {}
     for contact in dynamics.contacts:
         name, k = contact.site.name, contact.law.n_candidates

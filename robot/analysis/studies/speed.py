@@ -66,7 +66,8 @@ def reference_state_derivative(dynamics: D.DynamicsModel, data: pin.Data, t: flo
     out[nq : nq + nv] = qdd
     out[nq + nv] = driving_force @ v[mechanism.actuator_v_index] + actuator @ v
     out[nq + nv + 1] = tau @ v
-    out[nq + nv + 2] = (applied - actuator) @ v
+    if dynamics.forces is not None:
+        out[nq + nv + 2] = (applied - actuator) @ v
     return out
 
 
@@ -88,7 +89,7 @@ def sample_states(run: Run, t_end: float = 0.02) -> dict:
     force to speak of.
     """
     dynamics = run.dynamics
-    y0 = np.concatenate([run.y0, np.zeros(D.N_WORK)])  # work accumulators start at zero
+    y0 = np.concatenate([run.y0, np.zeros(dynamics.n_work)])  # work accumulators start at zero
     states = {"initial": (0.0, y0, initial_onset_rates(dynamics))}
     if not dynamics.contacts:
         return states
