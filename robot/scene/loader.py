@@ -136,25 +136,6 @@ class TrajectorySpec:
 
 
 @dataclass(frozen=True)
-class ForceSpec:
-    """A ``[[force]]`` table: its element type (``robot.dynamics.forces.FORCE_TYPES``) and validated parameters."""
-
-    name: str
-    kind: str
-    parameters: dict[str, Any]
-    where: str
-
-
-@dataclass(frozen=True)
-class ActuatorSpec:
-    """How an actuated joint is driven: ``motion`` (trajectory), ``force`` (``function`` of t) or ``none``."""
-
-    joint: str
-    mode: str
-    function: Any = None
-
-
-@dataclass(frozen=True)
 class Scene:
     """A validated scene (still independent of Pinocchio: see :func:`robot.run.build_run`)."""
 
@@ -170,8 +151,8 @@ class Scene:
     limits: FailureLimits
     clearances: tuple[ClearanceSpec, ...] = field(default_factory=tuple)
     misalignment_deg: dict[str, float] = field(default_factory=dict)
-    forces: tuple[ForceSpec, ...] = field(default_factory=tuple)
-    actuators: dict[str, ActuatorSpec] = field(default_factory=dict)
+    forces: tuple = field(default_factory=tuple)  # robot.scene.forces.ForceSpec per [[force]] table
+    actuators: dict = field(default_factory=dict)  # joint -> robot.scene.forces.ActuatorSpec
     #: the scene's TOML document as resolved (``extends`` merged, overrides applied)
     document: dict[str, Any] = field(default_factory=dict, compare=False, repr=False)
     #: the folder that relative paths of the document are relative to
@@ -393,80 +374,6 @@ def _trajectory(table: dict, where: str, base_dir: Path | None = None) -> Trajec
     return TrajectorySpec(kind, period, preset, coordinates, functions)
 
 
-def _forces(data: dict, where: str, base_dir: Path) -> tuple[ForceSpec, ...]:
-    """``[[force]]`` tables, each parsed by its registered element type (``robot.dynamics.forces``)."""
-    tables = data.get("force", [])
-    if not isinstance(tables, list):
-        raise SceneError(f"{where}: force must be an array of tables [[force]]", key="force", value=tables)
-    if not tables:
-        return ()
-    from robot.dynamics.forces import FORCE_TYPES  # the element modules import this module: import on use
-
-    specs, names = [], set()
-    for index, table in enumerate(tables):
-        w = f"{where} [[force]] #{index + 1}"
-        if not isinstance(table, dict):
-            raise SceneError(f"{w} must be a table", value=table)
-        kind = table.get("type")
-        if kind not in FORCE_TYPES:
-            raise SceneError(f"{w}: type={kind!r} is not a force element type; types: {', '.join(sorted(FORCE_TYPES))}", key="type", value=kind)
-        name = table.get("name", f"{kind}_{index + 1}")
-        if not isinstance(name, str) or not name.replace("_", "").isalnum() or name in names | {"work", "energy"}:
-            raise SceneError(f"{w}: name={name!r} must be a unique identifier (letters, digits, _)", key="name", value=name)
-        names.add(name)
-        w = f"{where} force {name!r} ({kind})"
-        element = FORCE_TYPES[kind]
-        function_keys = _function_keys(table)
-        if function_keys is not None:  # else the element's parse names the unknown function
-            _unknown(table, element.KEYS | {"name", "type"} | function_keys, w)
-        specs.append(ForceSpec(name, kind, element.parse(table, w, base_dir), w))
-    return tuple(specs)
-
-
-def _function_keys(table: dict) -> set[str] | None:
-    """The keys of the time function a table names; None for an unknown function."""
-    if "function" not in table:
-        return set()
-    from robot.scene.values import FUNCTION_KEYS
-
-    kind = table["function"]
-    return FUNCTION_KEYS[kind] | {"function"} if isinstance(kind, str) and kind in FUNCTION_KEYS else None
-
-
-def _actuators(data: dict, where: str, base_dir: Path) -> dict[str, ActuatorSpec]:
-    """``[actuators]``: per joint ``{mode = "motion" | "force" | "none", function ... (force)}``."""
-    table = _table(data, "actuators", where)
-    out = {}
-    for joint, entry in table.items():
-        w = f"{where} [actuators] {joint}"
-        if not isinstance(entry, dict):
-            raise SceneError(f"{w} must be a table {{mode = 'motion' | 'force' | 'none', ...}}", key=joint, value=entry)
-        mode = entry.get("mode")
-        if mode not in ("motion", "force", "none"):
-            raise SceneError(f"{w}: mode={mode!r} must be 'motion', 'force' or 'none'", key="mode", value=mode)
-        if mode == "force":
-            from robot.scene.values import time_function
-
-            function = time_function({k: v for k, v in entry.items() if k != "mode"}, w, base_dir)
-            out[joint] = ActuatorSpec(joint, mode, function)
-        else:
-            _unknown(entry, {"mode"}, w)
-            out[joint] = ActuatorSpec(joint, mode)
-    return out
-
-
-def _check_time_tables(trajectory: TrajectorySpec, actuators: dict[str, ActuatorSpec], forces: tuple[ForceSpec, ...], duration: float, where: str) -> None:
-    """Every time table covers the run [0, duration]."""
-    from robot.scene.values import check_covers
-
-    for joint, function in trajectory.functions.items():
-        check_covers(function, 0.0, duration, "file", f"{where} [trajectory] {joint}")
-    for joint, actuator in actuators.items():
-        check_covers(actuator.function, 0.0, duration, "time", f"{where} [actuators] {joint}")
-    for spec in forces:
-        check_covers(spec.parameters.get("function"), 0.0, duration, "time", spec.where)
-
-
 def load_scene(name_or_path: str | Path, overrides: Mapping[str, Any] | None = None, **top_level: Any) -> Scene:
     """Read and validate a scene.
 
@@ -547,9 +454,10 @@ def scene_from_document(data: dict[str, Any], path: Path, base_dir: Path) -> Sce
         _number(misalignment, joint, f"{where} [initial] misalignment_deg", low=-5.0, high=5.0)
     duration = _number(data, "duration", where, required=True, low=0.0, low_open=True)
     trajectory = _trajectory(_table(data, "trajectory", where), where, base_dir)
-    forces, actuators = _forces(data, where, base_dir), _actuators(data, where, base_dir)
-    if trajectory.functions or forces or actuators:
-        _check_time_tables(trajectory, actuators, forces, duration, where)
+    from robot.scene import forces as F  # imports this module: import on use
+
+    forces, actuators = F.force_specs(data, where, base_dir), F.actuator_specs(_table(data, "actuators", where), where, base_dir)
+    F.check_time_tables(trajectory, actuators, forces, duration, where)
     end_effector = data.get("end_effector", "platform")
     if not isinstance(end_effector, str):
         raise SceneError(f"{where}: end_effector={end_effector!r} must be a frame name", key="end_effector", value=end_effector)
