@@ -521,7 +521,7 @@ def state_derivative(
                 if tau is None:
                     tau = np.zeros(nv)
                 views.add_generalized_force(model, data, result, tau)
-    out = np.empty(dynamics.state_size)
+    out = np.empty(nq + nv + dynamics.n_work)
     total = workspace.zero_tau if tau is None else tau
     if workspace.forces is not None:
         total = total + workspace.forces.evaluate(t, q, v)
@@ -530,15 +530,13 @@ def state_derivative(
     # actuator power: driving force (= Pinocchio's multiplier of the driving row) times the actuator rate
     out[nq + nv] = data.lambda_c[kernel.n_closure_rows :] @ v[mechanism.actuator_v_index] if kernel.driven else 0.0
     out[nq + nv + 1] = 0.0 if tau is None else tau @ v
-    _add_force_powers(workspace, out, nq + nv)
+    if workspace.forces is not None:
+        _add_force_powers(workspace.forces, out, nq + nv)
     return out
 
 
-def _add_force_powers(workspace: DynamicsWorkspace, out: np.ndarray, offset: int) -> None:
+def _add_force_powers(forces: BoundForces, out: np.ndarray, offset: int) -> None:
     """Force-driven actuators' power into the actuator power, the elements' power into the force power."""
-    forces = workspace.forces
-    if forces is None:
-        return
     out[offset] += forces.powers[0]
     out[offset + 2] = forces.powers[1]
 
@@ -583,14 +581,15 @@ def _compiled_state_derivative(
     tau = compiled.tau
     tau[:] = 0.0
     _compiled_sites(dynamics, workspace, compiled, t, v, onset_rates, tau)
-    out = np.empty(dynamics.state_size)
+    out = np.empty(nq + nv + dynamics.n_work)
     # force elements: data.oMi and data.J are at q (computeJointJacobiansTimeVariation)
     total = tau if workspace.forces is None else tau + workspace.forces.evaluate(t, q, v)
     out[nq : nq + nv] = pin.forwardDynamics(model, data, total, compiled.phi_q, compiled.drift)
     out[:nq] = pin.tangentMapProduct(model, q, v[:, None])
     # actuator power: driving force (= Pinocchio's multiplier of the driving row) times the actuator rate
     K.write_powers(data.lambda_c, compiled.n_closure_rows, v, compiled.actuator_v, tau, out, nq + nv)
-    _add_force_powers(workspace, out, nq + nv)
+    if workspace.forces is not None:
+        _add_force_powers(workspace.forces, out, nq + nv)
     return out
 
 
