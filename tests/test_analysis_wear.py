@@ -9,7 +9,7 @@ from clearance_contact.materials import STEEL, Material, combined_modulus
 from robot.analysis import ANALYSES, AnalysisError
 from robot.analysis.wear import archard_wear, hertz_line_half_width
 
-K_W = 3.7e-5  # dimensionless wear coefficient (Flores 2009 uses 7.45e-5 .. 1e-4 ranges; any value works here)
+K_W = 3.7e-5  # dimensionless wear coefficient (arbitrary: every check scales with it)
 HARDNESS = 1.9e9  # Pa
 R_B, R_J, LENGTH = 0.0101, 0.0100, 0.02  # m
 

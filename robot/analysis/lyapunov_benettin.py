@@ -4,7 +4,7 @@ Benettin, Galgani, Giorgilli & Strelcyn, "Lyapunov characteristic exponents
 for smooth dynamical systems and for Hamiltonian systems; a method for
 computing all of them", Meccanica 15 (1980) 9-20 (Part 1, Sec. 3), in the
 two-trajectory form of Wolf, Swift, Swinney & Vastano, "Determining Lyapunov
-exponents from a time series", Physica D 16 (1985) 285-317 (Sec. 3, eq. (6)):
+exponents from a time series", Physica D 16 (1985) 285-317, Sec. 3):
 a reference trajectory x(t) and a perturbed one y(t), |y(t_0) - x(t_0)| = d_0,
 are advanced over intervals tau; after each interval the separation d_k is
 measured and the perturbed state is reset to distance d_0 along the current

@@ -8,8 +8,8 @@ Lyapunov exponents from small data sets", Physica D 65 (1993) 117-134:
    Y_i = (x_i, x_{i+J}, ..., x_{i+(m-1)J}),  i = 0 .. M-1;
 2. for each reference point Y_i its nearest neighbour Y_j, excluding temporal
    neighbours |i - j| <= w (Theiler window; Rosenstein: the mean period, the
-   reciprocal of the mean frequency of the power spectrum, eq. (4));
-3. the mean log divergence of the pairs after k steps (their eq. (10)),
+   reciprocal of the mean frequency of the power spectrum, Sec. 3);
+3. the mean log divergence of the pairs after k steps,
 
        y(k) = < ln |Y_{i+k} - Y_{j+k}| >_i ,      k = 0 .. n_steps,
 
@@ -20,8 +20,8 @@ Lyapunov exponents from small data sets", Physica D 65 (1993) 117-134:
 Defaults follow the paper: J from the autocorrelation's drop below 1 - 1/e
 (Sec. 3), w from the mean period. The fit range must lie inside the linear
 region, before y(k) saturates at the attractor size; inspect ``divergence``
-(returned for that purpose) when choosing it. The result is an estimate: in the
-paper's tests the error is a few per cent to ~10 % (their Table 2).
+(returned for that purpose) when choosing it. The result is an estimate: the
+paper reports errors of a few per cent on its test systems with short series.
 """
 
 from __future__ import annotations
@@ -48,7 +48,7 @@ def autocorrelation_delay(samples: np.ndarray) -> int:
 
 
 def mean_period(samples: np.ndarray) -> float:
-    """Reciprocal of the power-weighted mean frequency, in samples (Rosenstein 1993, eq. (4))."""
+    """Reciprocal of the power-weighted mean frequency, in samples (Rosenstein 1993, Sec. 3)."""
     power = np.abs(np.fft.rfft(samples - samples.mean())) ** 2
     frequency = np.fft.rfftfreq(len(samples))
     return float(power.sum() / np.sum(power * frequency)) if np.any(power[1:]) else float(len(samples))
@@ -82,7 +82,7 @@ def nearest_neighbours(points: np.ndarray, theiler_window: int) -> tuple[np.ndar
 
 
 def mean_log_divergence(points: np.ndarray, theiler_window: int, n_steps: int) -> tuple[np.ndarray, int]:
-    """y(k), k = 0 .. n_steps (Rosenstein eq. (10)) and the number of pairs averaged."""
+    """y(k), k = 0 .. n_steps (module docstring, step 3) and the number of pairs averaged."""
     usable = len(points) - n_steps
     if usable < 2 * theiler_window + 3:
         raise AnalysisError(

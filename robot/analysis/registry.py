@@ -141,11 +141,13 @@ def register(
     outputs: tuple[Field, ...],
     source: str,
     sizes: Callable[..., dict[str, int]] = _no_sizes,
+    registry: AnalysisRegistry = ANALYSES,
 ) -> Callable[[Callable[..., dict[str, Any]]], Callable[..., dict[str, Any]]]:
-    """Decorator: register the decorated function as analysis ``name`` and return it unchanged."""
+    """Decorator: register the decorated function as analysis ``name`` (in ``registry``, default
+    :data:`ANALYSES`) and return it unchanged."""
 
     def decorate(function: Callable[..., dict[str, Any]]) -> Callable[..., dict[str, Any]]:
-        ANALYSES.add(Analysis(name, function, tuple(inputs), tuple(outputs), sizes, source))
+        registry.add(Analysis(name, function, tuple(inputs), tuple(outputs), sizes, source))
         return function
 
     return decorate

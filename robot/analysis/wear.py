@@ -3,7 +3,7 @@
 Archard's law (Archard, "Contact and rubbing of flat surfaces", J. Appl. Phys.
 24 (1953) 981-988), in the local form used for clearance joints by Flores
 ("Modeling and simulation of wear in revolute clearance joints in multibody
-systems", Mech. Mach. Theory 44 (2009) 1211-1222, eqs. (1)-(4)): a point of
+systems", Mech. Mach. Theory 44 (2009) 1211-1222): a point of
 the bearing surface under contact pressure p, sliding at speed v_s, wears at
 
     dh/dt = k_w p v_s / H,        h(theta) = (k_w / H) integral p(theta, t) v_s(t) dt,
