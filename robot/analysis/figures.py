@@ -17,7 +17,7 @@ from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 from matplotlib.patches import Circle
 
-from ..atomic import atomic_write
+from robot.io.atomic import atomic_write
 from .bifurcation import BifurcationDiagram
 from .errors import AnalysisError, require_array, require_positive
 
