@@ -176,7 +176,9 @@ def _grid_values(table: dict, key: str, where: str) -> tuple:
     spec = table[kind]
     if not isinstance(spec, dict) or set(spec) != _RANGE:
         raise SweepError(f"{where}: axis {key!r}: {kind}={spec!r} must be a table {{start, stop, num}}", key=key, value=spec)
-    num = _count(spec["num"], f"axis {key} {kind}.num", where, 1)
+    num = spec["num"]
+    if isinstance(num, bool) or not isinstance(num, int) or num < 1:
+        raise SweepError(f"{where}: axis {key!r}: {kind}.num={num!r} must be an integer >= 1", key=key, value=num)
     start, stop = spec["start"], spec["stop"]
     for name, value in (("start", start), ("stop", stop)):
         if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value) or (kind == "log" and value <= 0):
@@ -350,7 +352,7 @@ def _design(sweep: dict, axes_data: dict, where: str) -> tuple[tuple[Axis, ...],
         raise SweepError(f"{where} [sweep]: a {kind} design needs samples = N", key="sweep.samples", value=None)
     count = _count(sweep["samples"], "sweep.samples", where, 1)
     if kind == "sobol" and count & (count - 1):
-        raise SweepError(f"{where} [sweep]: samples={count} must be a power of 2 for a Sobol design", key="sweep.samples", value=count)
+        raise SweepError(f"{where}: sweep.samples={count} must be a power of 2 for a Sobol design", key="sweep.samples", value=count)
     seed = _count(sweep.get("seed", 0), "sweep.seed", where, 0)
     return axes, sampled_design(kind, axes, count, seed)
 
