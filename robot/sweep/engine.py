@@ -48,6 +48,8 @@ class SweepOutcome:
     #: failed runs in the whole store (this execution's and earlier ones), by cause
     causes: dict[str, int] = field(default_factory=dict)
     wall_time: float = 0.0
+    #: seconds from the first submission to the last run's completion (no cluster start, no probe)
+    run_phase_time: float = 0.0
     #: the workers' summaries of the runs made now (status, cause, wall and integration times)
     summaries: list[dict[str, Any]] = field(default_factory=list)
 
@@ -272,7 +274,9 @@ def run_sweep(
         with dask_client(scheduler, workers) as client:
             layout = _prepare_store(spec, path, client, tasks) if existing is None else _layout_of_store(spec, path)
             with _progress(len(todo), progress) as bar:
+                submitted = time.perf_counter()
                 outcome.summaries = _run_tasks(client, [tasks[i] for i in todo], layout, bar)
+                outcome.run_phase_time = time.perf_counter() - submitted
         outcome.ran = len(todo)
     outcome.causes = store_causes(path)
     outcome.wall_time = time.perf_counter() - started

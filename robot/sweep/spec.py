@@ -23,7 +23,7 @@ Schema (defaults in brackets; ``docs/sweep.md`` has the full description)::
     [statistics]                   # peak/RMS ('peak_rms') of signals; default: each
     signals = { R1_force = "R1_normal_force:sum" }   # clearance joint's summed normal force and
     t_start = 0.0                                     # deepest penetration, the end-effector
-                                                      # acceleration and deviation, driving forces
+                                                      # acceleration, the driving forces
     [[analysis]]                   # any analysis of robot.analysis.ANALYSES
     name = "poincare_stroboscopic"
     label = "ee_section"           # [name] prefix of its dataset variables
@@ -240,8 +240,6 @@ def default_statistics(scene: Scene) -> dict[str, str]:
         signals[f"{joint}_penetration"] = f"{joint}_penetration:max"
     signals["driving_force"] = "driving_force:maxabs"
     signals["ee_acceleration"] = "ee_acceleration:norm"
-    if scene.trajectory.kind == "platform":
-        signals["ee_deviation"] = "ee_deviation:norm"
     return signals
 
 

@@ -38,7 +38,7 @@ from robot.sweep.errors import SweepError
 
 FORMAT = "robot.sweep/1"
 COUNTS = ("nfev", "njev", "nsteps", "nrejected", "nevents", "nrestarts")
-TIMING = ("wall_time", "cpu_time", "integration_wall_time", "integration_cpu_time")
+TIMING = ("wall_time", "cpu_time", "simulate_wall_time", "integration_wall_time", "integration_cpu_time")
 NOT_RUN = -2
 #: packed run variables and the dimension that names their entries
 PACKED = {"counts": "count", "timings": "timing", "statistics": "statistic"}

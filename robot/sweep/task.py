@@ -126,10 +126,11 @@ def execute(task: RunTask, layout: Layout) -> dict[str, Any]:
     """
     started_wall, started_cpu = time.perf_counter(), time.process_time()
     record: dict[str, Any] = {"run_key": task.key}
-    integration = (np.nan, np.nan)
+    integration = (np.nan, np.nan, np.nan)
     try:
         result, signals = _simulate(task)
-        integration = (result.counts.get("wall_time", np.nan), result.counts.get("cpu_time", np.nan))
+        simulated = time.perf_counter() - started_wall
+        integration = (simulated, result.counts.get("wall_time", np.nan), result.counts.get("cpu_time", np.nan))
         record.update(status=result.status, cause=result.cause or "", message=result.message or "", t_reached=result.t_end, counts=_counts(result))
         if result.success:
             try:
@@ -148,4 +149,11 @@ def execute(task: RunTask, layout: Layout) -> dict[str, Any]:
     record["timings"] = np.array([wall, cpu, *integration])
     write_run(layout, task.index, record)
     written = time.perf_counter() - started_wall
-    return {"flat": task.flat, "status": int(record["status"]), "cause": record["cause"], "wall_time": written, "integration_wall_time": integration[0]}
+    return {
+        "flat": task.flat,
+        "status": int(record["status"]),
+        "cause": record["cause"],
+        "wall_time": written,
+        "simulate_wall_time": integration[0],
+        "integration_wall_time": integration[1],
+    }
