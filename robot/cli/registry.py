@@ -17,6 +17,8 @@ COMMANDS: dict[str, str] = {
     "bench": "robot.cli.bench",
     "work-precision": "robot.cli.work_precision",
     "build-urdf": "robot.cli.build_urdf",
+    "sweep": "robot.cli.sweep",
+    "bench-sweep": "robot.cli.bench_sweep",
 }
 
 #: one-line help of each command, for ``clearance --help`` without importing the modules
@@ -29,4 +31,6 @@ SUMMARIES: dict[str, str] = {
     "bench": "microseconds per clearance-joint contact evaluation",
     "work-precision": "speed against accuracy of every integrator, stability maps",
     "build-urdf": "regenerate urdf/ups_rps.urdf from the design parameters",
+    "sweep": "run a parameter sweep on dask, stored as an xarray dataset in zarr",
+    "bench-sweep": "benchmark of the sweep engine: runs per minute, parallel efficiency, overhead",
 }

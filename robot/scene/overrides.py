@@ -64,6 +64,26 @@ def _container(document: dict, parts: list[str], path: str) -> dict:
     return node
 
 
+def document_value(document: Mapping[str, Any], path: str) -> Any:
+    """The value at key path ``path`` of a scene document (``[[clearance]]`` entries by joint name or index).
+
+    SceneError naming the path if the document has no such key.
+    """
+    node: Any = document
+    parts = path.split(".")
+    i = 0
+    while i < len(parts):
+        part = parts[i]
+        if not isinstance(node, dict) or part not in node:
+            raise SceneError(f"key path {path!r}: the scene has no key {'.'.join(parts[: i + 1])!r}", key=path, value=None)
+        node = node[part]
+        if isinstance(node, list) and part in ARRAY_ENTRY_KEYS and i + 1 < len(parts):
+            node = _array_entry(node, parts[i + 1], path, part)
+            i += 1
+        i += 1
+    return node
+
+
 def apply_overrides(document: Mapping[str, Any], overrides: Mapping[str, Any]) -> dict:
     """Return a deep copy of ``document`` with each ``path -> value`` of ``overrides`` set."""
     result = copy.deepcopy(dict(document))
