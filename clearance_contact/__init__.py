@@ -10,6 +10,8 @@ as plain Python.
 * :mod:`.errors`: ``ContactError``, ``ContactParameterError``;
 * :mod:`.materials`: ``Material`` and Hertz-type stiffnesses;
 * :mod:`.normal_force`: Lankarani-Nikravesh law, ``ONSET_RATE_FLOOR``, Hertz impact peak;
+* :mod:`.dissipation`: normal dissipation models (L-N, Hunt-Crossley, Gonthier, Flores, Hu-Guo);
+* :mod:`.radial_laws`, :mod:`.radial_profile`: the revolute joint's radial laws and exact-profile wrench;
 * :mod:`.friction`: Brown-McPhee, Coulomb, no friction;
 * :mod:`.result`: ``JointContact``;
 * :mod:`.spherical`: ``SphericalClearanceJoint``;
@@ -35,6 +37,8 @@ from .normal_force import (
     lankarani_nikravesh,
     validate_normal_law,
 )
+from .dissipation import DISSIPATION_MODELS, rebound_ratio
+from .radial_laws import RADIAL_LAWS
 from .result import KIND_LINE, KIND_NONE, KIND_PLANE, KIND_POINT, JointContact
 from .spherical import SphericalClearanceJoint
 
@@ -68,4 +72,7 @@ __all__ = [
     "KIND_PLANE",
     "SphericalClearanceJoint",
     "RevoluteClearanceJoint",
+    "DISSIPATION_MODELS",
+    "RADIAL_LAWS",
+    "rebound_ratio",
 ]

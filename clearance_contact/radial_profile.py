@@ -38,9 +38,9 @@ S_gt = int q g_t).  With::
 
 The rate of each slice is delta_dot(z) = g_e.(m_dot + z t_dot) + g_t.t_dot, exact.
 
-Damping is pointwise: q is multiplied by max(1 + c delta_dot(z), 0) at each slice, c the
-damping coefficient (s/m) of the dissipation model (``dissipation``): the integrated
-law is the pointwise law, and it adds nothing with c = 0 (restitution 1).
+Damping is pointwise: q is multiplied by the dissipation model's factor at each slice,
+max(1 + chi delta_dot(z) / delta_dot_0, 0) (:mod:`~clearance_contact.dissipation`): the
+integrated law is the pointwise law, and it adds nothing with chi = 0 (restitution 1).
 
 Quadrature and its error
 ------------------------
@@ -76,6 +76,7 @@ import math
 import numpy as np
 
 from .compiled import jit
+from .dissipation import encoded_damping_factor
 from .radial_laws import encoded_line_density
 
 __all__ = ["RADIAL_POINTS", "RADIAL_NODES", "slice_gradient", "dry_interval", "half_integrals"]
@@ -179,13 +180,16 @@ def dry_interval(mx: float, my: float, tx: float, ty: float, r_j: float, r_b1: f
 
 @jit
 def half_integrals(
-    h0, h1, z_a, z_b, mx, my, tx, ty, mdx, mdy, tdx, tdy, r_j, r_b1, damping, parameters, law_offset, nodes
+    h0, h1, z_a, z_b, mx, my, tx, ty, mdx, mdy, tdx, tdy, r_j, r_b1, onset_rate, parameters, law_offset,
+    dissipation_offset, nodes
 ):
     """Integrals over the wetted part of the half [h0, h1] (h0 < h1) of the bearing.
 
     The wetted pieces are [h0, clip(z_a)] and [clip(z_b), h1] (clip to [h0, h1]).
-    ``damping`` c (s/m) weights the pressure by max(1 + c delta_dot, 0); the radial law
-    is encoded at ``parameters[law_offset:]`` (:func:`~.radial_laws.encoded_line_density`).
+    The pressure is weighted by max(factor, 0), the damping factor of the dissipation model
+    encoded at ``parameters[dissipation_offset:]`` at the node's rate and ``onset_rate``
+    (:func:`~.dissipation.encoded_damping_factor`); the radial law is encoded at
+    ``parameters[law_offset:]`` (:func:`~.radial_laws.encoded_line_density`).
     Returns (S_gx, S_gy, S_zgx, S_zgy, S_gtx, S_gty) of the damped pressure and
     (S_0, S_z, S_zz, S_delta) of the elastic one (module docstring).
     """
@@ -218,10 +222,9 @@ def half_integrals(
             s1 += q * z
             s2 += q * z * z
             sd += q * delta
-            if damping != 0.0:
-                rate = gex * (mdx + z * tdx) + gey * (mdy + z * tdy) + gtx * tdx + gty * tdy
-                factor = 1.0 + damping * rate
-                q = q * factor if factor > 0.0 else 0.0
+            rate = gex * (mdx + z * tdx) + gey * (mdy + z * tdy) + gtx * tdx + gty * tdy
+            factor = encoded_damping_factor(parameters, dissipation_offset, rate, onset_rate)
+            q = q * factor if factor > 0.0 else 0.0
             sgx += q * gex
             sgy += q * gey
             szgx += q * z * gex

@@ -123,10 +123,11 @@ Rolling Bearing Analysis, 5th ed. 2007), so that one formula covers every config
   exactly: relative error < 4e-6 on the force and < 5e-8 R_b2 on the centroid (worst
   case: contact boundary near the far rim; < 1e-8 elsewhere), a smooth function of the
   configuration (checked against adaptive quadrature in the tests).
-* **Damping** (L-N, paper eq. (11)): pointwise, the pressure at each point is
-  multiplied by [1 + 3 (1 - c_e^2)/4 * delta_dot / max(delta_dot_0, ONSET_RATE_FLOOR)],
-  clamped at >= 0 (:func:`~clearance_contact.normal_force.lankarani_nikravesh`), with
-  delta_dot the rate of that point's penetration.  Radial: at each quadrature node (the
+* **Damping** (``dissipation``, default L-N, paper eq. (11)): pointwise, the pressure
+  at each point is multiplied by [1 + chi(c_e) delta_dot / max(delta_dot_0,
+  ONSET_RATE_FLOOR)], clamped at >= 0, chi of the joint's dissipation model
+  (:mod:`~clearance_contact.dissipation`; L-N: 3 (1 - c_e^2)/4), with delta_dot the
+  rate of that point's penetration.  Radial: at each quadrature node (the
   slice rate is exact, from the twists).  Axial: delta_dot is linear over the face, so
   the elastic resultant times the factor at the centroid rate is the pointwise law
   integrated (exact for the force while the factor stays positive).  delta_dot_0 is the
@@ -192,7 +193,7 @@ blocks row-major)::
 
     [R_j, R_b1, R_b2, L_b/2, L_j/2, K_line, K_plane / annulus area, n_r, n_a, c_e,
      friction code, 5 friction parameters, radial law code, 2 radial law parameters,
-     10, disc rule (10 x 4)]
+     dissipation code, 2 dissipation parameters, 10, disc rule (10 x 4)]
 
 Status (:mod:`~clearance_contact.compiled`): 0 ok, ``STATUS_NONFINITE_INPUT``,
 ``STATUS_NONFINITE_PENETRATION``, ``STATUS_AXIS_TILT`` (journal at >= 90 deg), or
@@ -243,7 +244,8 @@ from .friction import (
     friction_encoding,
 )
 from .materials import Material, flat_punch_stiffness, require_material
-from .normal_force import EXPONENT_RANGE, ONSET_RATE_FLOOR, hysteresis_factor, lankarani_nikravesh
+from .dissipation import DEFAULT_DISSIPATION, DISSIPATION_PARAMETERS, dissipation_encoding, encoded_damping_factor
+from .normal_force import EXPONENT_RANGE
 from .radial_laws import RADIAL_LAW_PARAMETERS, RADIAL_LAWS, RadialLaw, radial_law
 from .radial_profile import RADIAL_NODES, dry_interval, half_integrals
 from .result import KIND_LINE, KIND_NONE, KIND_PLANE, KIND_POINT, JointContact
@@ -382,7 +384,8 @@ _P_AXIAL_EXPONENT = 8
 _P_RESTITUTION = 9
 _P_FRICTION = 10  # kind code, then FRICTION_PARAMETERS values
 _P_RADIAL_LAW = _P_FRICTION + 1 + FRICTION_PARAMETERS  # code, then RADIAL_LAW_PARAMETERS values
-_P_QUAD_POINTS = _P_RADIAL_LAW + 1 + RADIAL_LAW_PARAMETERS
+_P_DISSIPATION = _P_RADIAL_LAW + 1 + RADIAL_LAW_PARAMETERS  # code, then DISSIPATION_PARAMETERS values
+_P_QUAD_POINTS = _P_DISSIPATION + 1 + DISSIPATION_PARAMETERS
 _P_QUAD_RULE = _P_QUAD_POINTS + 1  # _QUAD_POINTS rows of 4 (see _disc_rule)
 _N_PARAMETERS = _P_QUAD_RULE + 4 * _QUAD_POINTS
 
@@ -710,13 +713,11 @@ def revolute_kernel(
     b2x, b2y, b2z = r01, r11, r21
     ubx, uby, ubz = r02, r12, r22
     ujx, ujy, ujz = j02, j12, j22
-    ce = parameters[_P_RESTITUTION]
 
     # ---- radial candidates 0 (top, z in [0, l]) and 2 (bottom, z in [-l, 0]) ------------
     # exact profile: wrench = -grad of the elastic energy, quadrature over the wetted
     # pieces (radial_profile), pointwise damping
     z_a, z_b, dry = dry_interval(mx, my, tx, ty, r_j, r_b1)
-    chi = hysteresis_factor(ce)
     a, a_dot = mid[0], mid[1]
     for k in (0, 2):
         if k == 0:
@@ -737,11 +738,9 @@ def revolute_kernel(
             out[PENETRATION_RATE + k] = b_dot if b_dot > a_dot else a_dot
         s0 = 0.0
         if delta_max > 0.0:
-            onset = onset_rates[k]
-            damping = chi / (onset if onset > ONSET_RATE_FLOOR else ONSET_RATE_FLOOR)
             sgx, sgy, szgx, szgy, sgtx, sgty, s0, s1, s2, sd = half_integrals(
-                h0, h1, z_a, z_b, mx, my, tx, ty, mdx, mdy, tdx, tdy, r_j, r_b1, damping,
-                parameters, _P_RADIAL_LAW, RADIAL_NODES,
+                h0, h1, z_a, z_b, mx, my, tx, ty, mdx, mdy, tdx, tdy, r_j, r_b1, onset_rates[k],
+                parameters, _P_RADIAL_LAW, _P_DISSIPATION, RADIAL_NODES,
             )
         if s0 > 0.0:
             z_c = s1 / s0
@@ -875,7 +874,10 @@ def revolute_kernel(
         ox = pbx + ring * hl * ubx + cx * b1x + cy * b2x
         oy = pby + ring * hl * uby + cx * b1y + cy * b2y
         oz = pbz + ring * hl * ubz + cx * b1z + cy * b2z
-        force_n = lankarani_nikravesh(1.0, rate_c, onset_rates[k], f_el, 1.0, ce) if f_el > 0.0 else 0.0
+        force_n = 0.0
+        if f_el > 0.0:
+            force_n = f_el * encoded_damping_factor(parameters, _P_DISSIPATION, rate_c, onset_rates[k])
+            force_n = force_n if force_n > 0.0 else 0.0
         _write_candidate(out, k, nx, ny, nz, ox, oy, oz, delta_c, spin_radius, force_n, 0.0)
 
     if not math.isfinite(out[PENETRATION] + out[PENETRATION + 1] + out[PENETRATION + 2] + out[PENETRATION + 3]):
@@ -956,7 +958,15 @@ class RevoluteClearanceJoint:
     journal_material, bearing_material:
         :class:`~clearance_contact.materials.Material` of each element.
     restitution:
-        c_e of the L-N damping, range (0, 1].
+        c_e of the damping, range (0, 1].
+    dissipation:
+        Normal dissipation model, a name of
+        :data:`~clearance_contact.dissipation.DISSIPATION_MODELS`; default
+        ``"lankarani_nikravesh"``.
+    radial_law:
+        Radial contact law, a name of :data:`~clearance_contact.radial_laws.RADIAL_LAWS`;
+        default ``"linear"`` (K_line delta^n_r); the others set their own stiffness and
+        exponent (leave ``radial_stiffness`` / ``radial_exponent`` unset).
     radial_exponent, axial_exponent:
         n_r, n_a of the line and plane laws, range [1, 1.5]; default 1 (linear laws of
         the default stiffnesses).
@@ -992,6 +1002,7 @@ class RevoluteClearanceJoint:
         "_force_over_speed",
         "_frictionless",
         "_radial_law",
+        "_dissipation",
         "_plane_density",
         "_half_l_b",
         "_half_l_j",
@@ -1040,6 +1051,7 @@ class RevoluteClearanceJoint:
         axial_stiffness: float | None = None,
         point_stiffness: float | None = None,
         radial_law: str = "linear",
+        dissipation: str = DEFAULT_DISSIPATION,
     ) -> None:
         r_j = require_positive("journal_radius", journal_radius)
         r_b1 = require_positive("bearing_inner_radius", bearing_inner_radius)
@@ -1089,6 +1101,7 @@ class RevoluteClearanceJoint:
         self._bearing_material = bearing_material
         self._restitution = ce
         self._radial_law = law
+        self._dissipation = dissipation
         self._n_r = law.exponent
         self._n_a = n_a
         self._n_p = n_p
@@ -1115,7 +1128,8 @@ class RevoluteClearanceJoint:
         parameters[_P_RESTITUTION] = ce
         parameters[_P_FRICTION] = code
         parameters[_P_FRICTION + 1 : _P_RADIAL_LAW] = friction_parameters
-        parameters[_P_RADIAL_LAW : _P_QUAD_POINTS] = self._radial_law.encoding()
+        parameters[_P_RADIAL_LAW:_P_DISSIPATION] = self._radial_law.encoding()
+        parameters[_P_DISSIPATION:_P_QUAD_POINTS] = dissipation_encoding(dissipation, ce)
         parameters[_P_QUAD_POINTS] = _QUAD_POINTS
         parameters[_P_QUAD_RULE:] = self._disc_rule.ravel()
         self.kernel_parameters = parameters
@@ -1182,6 +1196,11 @@ class RevoluteClearanceJoint:
         return self._k_line
 
     @property
+    def dissipation(self) -> str:
+        """Name of the normal dissipation model (:mod:`~clearance_contact.dissipation`)."""
+        return self._dissipation
+
+    @property
     def radial_law(self) -> RadialLaw:
         """The radial contact law (:mod:`~clearance_contact.radial_laws`)."""
         return self._radial_law
@@ -1214,7 +1233,7 @@ class RevoluteClearanceJoint:
             f"radial_exponent={self._n_r!r}, axial_exponent={self._n_a!r}, point_exponent={self._n_p!r}, "
             f"friction={self._friction!r}, radial_stiffness={self._k_line!r}, "
             f"axial_stiffness={self._k_plane!r}, point_stiffness={self._k_point!r}, "
-            f"radial_law={self._radial_law.name!r})"
+            f"radial_law={self._radial_law.name!r}, dissipation={self._dissipation!r})"
         )
 
     # -- geometry -------------------------------------------------------------------
