@@ -40,10 +40,12 @@ Schema (defaults in brackets)::
     outer_on = "child" # body carrying the socket / bearing
     material = "steel" # or outer_material / inner_material
     restitution = 0.9
+    dissipation = "lankarani_nikravesh" # or "hunt_crossley", "gonthier", "flores", "hu_guo"
     friction = {law = "brown_mcphee", static = 0.07, dynamic = 0.05, transition_velocity = 5e-3}
     # spherical: ball_radius, clearance, exponent [1.5], stiffness [Hertz]
     # revolute: journal_radius, radial_clearance, bearing_outer_radius, bearing_length,
-    #           axial_clearance, radial_exponent, axial_exponent, point_exponent, *_stiffness
+    #           axial_clearance, radial_exponent, axial_exponent, point_exponent, *_stiffness,
+    #           radial_law ["linear"; or "johnson", "pereira", "hertz_point"]
 
     [initial]
     misalignment_deg = { R1 = -0.035 }   # revolute clearance joints: bearing rotated about its
@@ -84,11 +86,12 @@ _BAUMGARTE_KEYS = {"alpha", "beta"}
 _LIMIT_KEYS = {"penetration_ratio", "max_residual", "min_step", "max_wall_time"}
 _MATERIAL_KEYS = {"youngs_modulus", "poisson_ratio"}
 _FRICTION_KEYS = {"law", "static", "dynamic", "transition_velocity", "viscous", "reference_force", "coefficient", "regularisation_velocity"}
-_COMMON_CLEARANCE = {"joint", "type", "outer_on", "material", "outer_material", "inner_material", "restitution", "friction"}
+_COMMON_CLEARANCE = {"joint", "type", "outer_on", "material", "outer_material", "inner_material", "restitution", "friction", "dissipation"}
 _SPHERICAL_KEYS = _COMMON_CLEARANCE | {"ball_radius", "clearance", "exponent", "stiffness"}
 _REVOLUTE_KEYS = _COMMON_CLEARANCE | {
     "journal_radius", "radial_clearance", "bearing_outer_radius", "bearing_length", "axial_clearance",
     "radial_exponent", "axial_exponent", "point_exponent", "radial_stiffness", "axial_stiffness", "point_stiffness",
+    "radial_law",
 }
 _COORDINATE_KEYS = {"offset", "rate", "amplitudes", "harmonics", "phases"}
 
@@ -267,12 +270,16 @@ def _clearance(table: Any, index: int, materials: dict[str, Material], where: st
     outer, inner = material("outer_material"), material("inner_material")
     friction = _friction(table.get("friction"), f"{w} friction")
     restitution = _number(table, "restitution", w, 0.9)
+    # contact force models by name (clearance_contact.DISSIPATION_MODELS / RADIAL_LAWS; the
+    # joints validate the names): only passed when given, so the joints' defaults apply
+    models = {key: table[key] for key in ("dissipation", "radial_law") if key in table}
     try:
         if kind == "spherical":
             ball = _number(table, "ball_radius", w, required=True)
             clearance = _number(table, "clearance", w, required=True)
             law = SphericalClearanceJoint(
-                ball, ball + clearance, inner, outer, restitution, _number(table, "exponent", w, 1.5), friction, _number(table, "stiffness", w)
+                ball, ball + clearance, inner, outer, restitution, _number(table, "exponent", w, 1.5), friction, _number(table, "stiffness", w),
+                **models,
             )
         else:
             journal = _number(table, "journal_radius", w, required=True)
@@ -293,6 +300,7 @@ def _clearance(table: Any, index: int, materials: dict[str, Material], where: st
                 restitution=restitution,
                 friction=friction,
                 **optional,
+                **models,
             )
     except ContactError as exc:
         raise SceneError(f"{w}: {exc}") from None
