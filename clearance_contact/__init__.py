@@ -14,6 +14,8 @@ as plain Python.
 * :mod:`.radial_laws`, :mod:`.radial_profile`: the revolute joint's radial laws and exact-profile wrench;
 * :mod:`.friction`: Brown-McPhee, Coulomb, no friction;
 * :mod:`.result`: ``JointContact``;
+* :mod:`.joint`: ``ClearanceJoint`` (base class of the joint types), ``Shape``, ``output_layout``;
+* :mod:`.registry`: ``register_joint_type``, ``joint_type``, ``joint_types``;
 * :mod:`.spherical`: ``SphericalClearanceJoint``;
 * :mod:`.revolute`: ``RevoluteClearanceJoint``.
 """
@@ -40,8 +42,9 @@ from .normal_force import (
 from .dissipation import DISSIPATION_MODELS, rebound_ratio
 from .radial_laws import RADIAL_LAWS
 from .result import KIND_LINE, KIND_NONE, KIND_PLANE, KIND_POINT, JointContact
+from .joint import ClearanceJoint, Shape, output_layout
+from .registry import joint_type, joint_types, register_joint_type
 from .spherical import SphericalClearanceJoint
-
 from .revolute import RevoluteClearanceJoint
 
 __all__ = [
@@ -70,6 +73,12 @@ __all__ = [
     "KIND_POINT",
     "KIND_LINE",
     "KIND_PLANE",
+    "ClearanceJoint",
+    "Shape",
+    "output_layout",
+    "register_joint_type",
+    "joint_type",
+    "joint_types",
     "SphericalClearanceJoint",
     "RevoluteClearanceJoint",
     "DISSIPATION_MODELS",

@@ -97,7 +97,9 @@ def dissipation_factor(name: str, restitution: float) -> float:
     """chi of the model ``name`` at the coefficient of restitution c_e in (0, 1]."""
     model = DISSIPATION_MODELS.get(name) if isinstance(name, str) else None
     if model is None:
-        raise ContactParameterError(f"dissipation={name!r} is not known; valid: {', '.join(DISSIPATION_MODELS)}")
+        raise ContactParameterError(
+            f"dissipation={name!r} is not known; valid: {', '.join(DISSIPATION_MODELS)}", key="dissipation", value=name
+        )
     ce = require_in_range("restitution", restitution, 0.0, 1.0, low_inclusive=False)
     return float(model(ce))
 

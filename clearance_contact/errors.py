@@ -16,6 +16,7 @@ import math
 import numpy as np
 
 __all__ = [
+    "ClearanceMechanismsError",
     "ContactError",
     "ContactParameterError",
     "require_finite",
@@ -27,7 +28,21 @@ __all__ = [
 ]
 
 
-class ContactError(Exception):
+class ClearanceMechanismsError(Exception):
+    """Root of every error raised by this project (``clearance_contact`` and ``robot``).
+
+    ``key`` and ``value``: the offending input (a parameter name or a scene key
+    path, and its value) when the error is about one, else ``None``; the message
+    names them too. ``robot`` re-exports this class as ``robot.Error``.
+    """
+
+    def __init__(self, message: str = "", *, key: str | None = None, value=None):
+        super().__init__(message)
+        self.key = key
+        self.value = value
+
+
+class ContactError(ClearanceMechanismsError):
     """Base class of every error raised by :mod:`clearance_contact`."""
 
 
@@ -43,9 +58,9 @@ def require_finite(name: str, value: float) -> float:
     try:
         x = float(value)
     except (TypeError, ValueError):
-        raise ContactParameterError(f"{name}={value!r} must be a real number") from None
+        raise ContactParameterError(f"{name}={value!r} must be a real number", key=name, value=value) from None
     if not math.isfinite(x):
-        raise ContactParameterError(f"{name}={value!r} must be finite")
+        raise ContactParameterError(f"{name}={value!r} must be finite", key=name, value=value)
     return x
 
 
@@ -53,7 +68,7 @@ def require_positive(name: str, value: float) -> float:
     """Return ``float(value)``; raise unless ``0 < value < inf``."""
     x = require_finite(name, value)
     if not x > 0.0:
-        raise ContactParameterError(f"{name}={value!r} must be positive (valid range (0, inf))")
+        raise ContactParameterError(f"{name}={value!r} must be positive (valid range (0, inf))", key=name, value=value)
     return x
 
 
@@ -61,7 +76,7 @@ def require_non_negative(name: str, value: float) -> float:
     """Return ``float(value)``; raise unless ``0 <= value < inf``."""
     x = require_finite(name, value)
     if not x >= 0.0:
-        raise ContactParameterError(f"{name}={value!r} must be non-negative (valid range [0, inf))")
+        raise ContactParameterError(f"{name}={value!r} must be non-negative (valid range [0, inf))", key=name, value=value)
     return x
 
 
@@ -84,7 +99,7 @@ def require_in_range(
     below = x <= high if high_inclusive else x < high
     if not (above and below):
         interval = f"{'[' if low_inclusive else '('}{low:g}, {high:g}{']' if high_inclusive else ')'}"
-        raise ContactParameterError(f"{name}={value!r} is outside the valid range {interval}")
+        raise ContactParameterError(f"{name}={value!r} is outside the valid range {interval}", key=name, value=value)
     return x
 
 

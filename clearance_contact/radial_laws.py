@@ -214,5 +214,7 @@ def radial_law(
     """The radial law ``name`` (a key of :data:`RADIAL_LAWS`) for this geometry and these materials."""
     builder = RADIAL_LAWS.get(name) if isinstance(name, str) else None
     if builder is None:
-        raise ContactParameterError(f"radial_law={name!r} is not known; valid: {', '.join(RADIAL_LAWS)}")
+        raise ContactParameterError(
+            f"radial_law={name!r} is not known; valid: {', '.join(RADIAL_LAWS)}", key="radial_law", value=name
+        )
     return builder(journal_radius, bore_radius, bearing_length, outer, inner, stiffness, exponent)

@@ -208,7 +208,6 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numpy.typing import ArrayLike
 
 from .compiled import (
     STATUS_AXIS_TILT,
@@ -221,34 +220,24 @@ from .compiled import (
     norm2,
     jit,
 )
-from .errors import (
-    ROTATION_SHAPE,
-    STATE_NAMES,
-    VECTOR_SHAPE,
-    ContactError,
-    ContactParameterError,
-    joint_state,
-    nonfinite_state_message,
-    require_in_range,
-    require_positive,
-    state_array,
-)
+from .errors import ContactError, ContactParameterError, require_in_range, require_positive
 from .friction import (
-    require_friction_law,
     FRICTION_EXTERNAL,
     FRICTION_NONE,
     FRICTION_PARAMETERS,
     FrictionLaw,
     NoFriction,
     encoded_force_over_speed,
-    friction_encoding,
 )
-from .materials import Material, flat_punch_stiffness, require_material
 from .dissipation import DEFAULT_DISSIPATION, DISSIPATION_PARAMETERS, dissipation_encoding, encoded_damping_factor
+from .joint import ClearanceJoint, Shape, output_layout
+from .materials import Material, flat_punch_stiffness, require_material
 from .normal_force import EXPONENT_RANGE
-from .radial_laws import RADIAL_LAW_PARAMETERS, RADIAL_LAWS, RadialLaw, radial_law
+from . import radial_laws
+from .radial_laws import RADIAL_LAW_PARAMETERS, RadialLaw
 from .radial_profile import RADIAL_NODES, dry_interval, half_integrals
-from .result import KIND_LINE, KIND_NONE, KIND_PLANE, KIND_POINT, JointContact
+from .registry import register_joint_type
+from .result import KIND_LINE, KIND_NONE, KIND_PLANE, KIND_POINT
 
 __all__ = ["RevoluteClearanceJoint", "revolute_kernel", "revolute_penetration_kernel", "revolute_wrenches"]
 
@@ -391,30 +380,31 @@ _N_PARAMETERS = _P_QUAD_RULE + 4 * _QUAD_POINTS
 
 # -- out layout (k = 4 candidates, r = 2 eccentricity rows) -------------------------------
 _K = 4
-PENETRATION = 0
-PENETRATION_RATE = PENETRATION + _K
-NORMAL_FORCE = PENETRATION_RATE + _K
-NORMAL = NORMAL_FORCE + _K
-POINT_OUTER = NORMAL + 3 * _K
-POINT_INNER = POINT_OUTER + 3 * _K
-FRICTION_FORCE = POINT_INNER + 3 * _K
-ECCENTRICITY = FRICTION_FORCE + 3 * _K
-WRENCH_OUTER = ECCENTRICITY + 3 * 2
-WRENCH_INNER = WRENCH_OUTER + 6
-KIND = WRENCH_INNER + 6
-# internal sections (after the common layout): what the wrenches and a Python friction law need
-CENTROID_DEPTH = KIND + _K
-"""(k) penetration at the centroid: P = point_outer + CENTROID_DEPTH / 2 * normal."""
-SPIN_RADIUS = CENTROID_DEPTH + _K
-"""(k) rms radius r_s of the pressure about P (m)."""
-SPIN_SPEED = SPIN_RADIUS + _K
-"""(k) spin slip speed w_n r_s (m/s), where friction was evaluated."""
-SPIN_TORQUE = SPIN_SPEED + _K
-"""(k) friction torque T_spin about the normal on the journal (N m)."""
-NORMAL_COUPLE = SPIN_TORQUE + _K
-"""(k) couple of the normal pressure about the normal on the journal (N m): the pitch of
-the radial wrench under a skew tilt (module docstring); 0 for the axial candidates."""
-OUTPUT_SIZE = NORMAL_COUPLE + _K
+# internal sections (k each, after the common layout): what the wrenches and a Python friction law need:
+# CENTROID_DEPTH penetration at the centroid (P = point_outer + CENTROID_DEPTH / 2 * normal), SPIN_RADIUS
+# rms radius r_s of the pressure about P (m), SPIN_SPEED spin slip w_n r_s (m/s) where friction was
+# evaluated, SPIN_TORQUE friction torque T_spin about the normal on the journal (N m), NORMAL_COUPLE
+# couple of the normal pressure about the normal on the journal (N m): the pitch of the radial wrench
+# under a skew tilt (module docstring), 0 for the axial candidates
+_EXTRA_OUTPUTS = ("CENTROID_DEPTH", "SPIN_RADIUS", "SPIN_SPEED", "SPIN_TORQUE", "NORMAL_COUPLE")
+_LAYOUT = output_layout(_K, 2, _EXTRA_OUTPUTS)
+PENETRATION = _LAYOUT["PENETRATION"]
+PENETRATION_RATE = _LAYOUT["PENETRATION_RATE"]
+NORMAL_FORCE = _LAYOUT["NORMAL_FORCE"]
+NORMAL = _LAYOUT["NORMAL"]
+POINT_OUTER = _LAYOUT["POINT_OUTER"]
+POINT_INNER = _LAYOUT["POINT_INNER"]
+FRICTION_FORCE = _LAYOUT["FRICTION_FORCE"]
+ECCENTRICITY = _LAYOUT["ECCENTRICITY"]
+WRENCH_OUTER = _LAYOUT["WRENCH_OUTER"]
+WRENCH_INNER = _LAYOUT["WRENCH_INNER"]
+KIND = _LAYOUT["KIND"]
+CENTROID_DEPTH = _LAYOUT["CENTROID_DEPTH"]
+SPIN_RADIUS = _LAYOUT["SPIN_RADIUS"]
+SPIN_SPEED = _LAYOUT["SPIN_SPEED"]
+SPIN_TORQUE = _LAYOUT["SPIN_TORQUE"]
+NORMAL_COUPLE = _LAYOUT["NORMAL_COUPLE"]
+OUTPUT_SIZE = _LAYOUT["OUTPUT_SIZE"]
 
 
 @jit
@@ -930,14 +920,8 @@ def revolute_kernel(
     return STATUS_OK
 
 
-def _radial_law_of(name, r_j, r_b1, l_b, bearing_material, journal_material, stiffness, exponent) -> RadialLaw:
-    """The joint's radial law (:mod:`~clearance_contact.radial_laws`); radial_exponent 1.0 is the default."""
-    if not isinstance(name, str):
-        raise ContactParameterError(f"radial_law={name!r} must be a name of {', '.join(RADIAL_LAWS)}")
-    return radial_law(name, r_j, r_b1, l_b, bearing_material, journal_material, stiffness, exponent)
-
-
-class RevoluteClearanceJoint:
+@register_joint_type
+class RevoluteClearanceJoint(ClearanceJoint):
     """Flanged journal (inner element) in a bearing (outer element) with radial and axial clearance.
 
     See the module docstring for the geometry, the contact law and their accuracy.
@@ -981,6 +965,11 @@ class RevoluteClearanceJoint:
     axial_stiffness:
         K_plane in N/m^n_a for one whole annular face, range (0, inf); None: 2 E* R_b2
         (requires n_a = 1).
+
+    Joint type ``"revolute"`` (:mod:`~clearance_contact.registry`); scene keys
+    ``journal_radius``, ``radial_clearance`` (c_r), ``bearing_outer_radius``,
+    ``bearing_length``, ``axial_clearance`` (c_a), the exponents and stiffnesses, and the
+    names ``radial_law`` and ``dissipation``.
     """
 
     __slots__ = (
@@ -991,15 +980,12 @@ class RevoluteClearanceJoint:
         "_l_b",
         "_journal_material",
         "_bearing_material",
-        "_restitution",
         "_n_r",
         "_n_a",
         "_n_p",
         "_k_line",
         "_k_plane",
         "_k_point",
-        "_friction",
-        "_force_over_speed",
         "_frictionless",
         "_radial_law",
         "_dissipation",
@@ -1007,29 +993,27 @@ class RevoluteClearanceJoint:
         "_half_l_b",
         "_half_l_j",
         "_disc_rule",
-        "_friction_code",
-        "kernel_parameters",
     )
 
-    n_candidates: int = 4
-    N_CANDIDATES: int = _K
-    N_ECCENTRICITY: int = 2
-    PENETRATION: int = PENETRATION
-    PENETRATION_RATE: int = PENETRATION_RATE
-    NORMAL_FORCE: int = NORMAL_FORCE
-    NORMAL: int = NORMAL
-    POINT_OUTER: int = POINT_OUTER
-    POINT_INNER: int = POINT_INNER
-    FRICTION_FORCE: int = FRICTION_FORCE
-    ECCENTRICITY: int = ECCENTRICITY
-    WRENCH_OUTER: int = WRENCH_OUTER
-    WRENCH_INNER: int = WRENCH_INNER
-    KIND: int = KIND
-    CENTROID_DEPTH: int = CENTROID_DEPTH
-    SPIN_RADIUS: int = SPIN_RADIUS
-    SPIN_SPEED: int = SPIN_SPEED
-    SPIN_TORQUE: int = SPIN_TORQUE
-    output_size: int = OUTPUT_SIZE
+    type_name = "revolute"
+    N_CANDIDATES = _K
+    N_ECCENTRICITY = 2
+    EXTRA_OUTPUTS = _EXTRA_OUTPUTS
+    SITE_KINDS = ("revolute",)
+    SCENE_KEYS = (
+        "journal_radius", "radial_clearance", "bearing_outer_radius", "bearing_length", "axial_clearance",
+        "radial_exponent", "axial_exponent", "point_exponent", "radial_stiffness", "axial_stiffness", "point_stiffness",
+        "radial_law", "dissipation",
+    )  # fmt: skip
+    NAME_KEYS = ("radial_law", "dissipation")
+    REQUIRED_KEYS = ("journal_radius", "radial_clearance", "bearing_outer_radius", "bearing_length", "axial_clearance")
+    GEOMETRY_KEYS = REQUIRED_KEYS
+    GAP_KEYS = ("radial_clearance", "axial_clearance")
+    DEFAULT_GEOMETRY = {
+        "journal_radius": 0.02, "radial_clearance": 1.0e-4, "bearing_outer_radius": 0.035, "bearing_length": 0.04, "axial_clearance": 1.0e-4,
+    }  # fmt: skip
+    KERNEL_ID = 1
+    EXAGGERATE_TILT = True
     kernel = KernelAttribute(revolute_kernel)
     penetration_kernel = staticmethod(revolute_penetration_kernel)
 
@@ -1075,10 +1059,10 @@ class RevoluteClearanceJoint:
             )
         require_material("journal_material", journal_material)
         require_material("bearing_material", bearing_material)
-        require_friction_law(friction)
+        code, friction_parameters = self._wire_friction(friction)
         n_a = require_in_range("axial_exponent", axial_exponent, *EXPONENT_RANGE)
         n_p = require_in_range("point_exponent", point_exponent, *EXPONENT_RANGE)
-        law = _radial_law_of(radial_law, r_j, r_b1, l_b, bearing_material, journal_material, radial_stiffness, radial_exponent)
+        law = radial_laws.radial_law(radial_law, r_j, r_b1, l_b, bearing_material, journal_material, radial_stiffness, radial_exponent)
         if axial_stiffness is None:
             if n_a != 1.0:
                 raise ContactParameterError(
@@ -1110,11 +1094,7 @@ class RevoluteClearanceJoint:
         self._k_point = k_point
         self._plane_density = k_plane / (math.pi * (r_b2 * r_b2 - r_b1 * r_b1))
         self._disc_rule = _disc_rule(_QUAD_POINTS, n_a)
-        self._friction = friction
-        self._force_over_speed = getattr(friction, "force_over_speed", None)
         self._frictionless = isinstance(friction, NoFriction)
-        code, friction_parameters = friction_encoding(friction)
-        self._friction_code = code
         parameters = np.zeros(_N_PARAMETERS)
         parameters[_P_JOURNAL_RADIUS] = r_j
         parameters[_P_BORE_RADIUS] = r_b1
@@ -1134,16 +1114,47 @@ class RevoluteClearanceJoint:
         parameters[_P_QUAD_RULE:] = self._disc_rule.ravel()
         self.kernel_parameters = parameters
 
+    @classmethod
+    def _from_scene(cls, parameters: dict, outer_material: Material, inner_material: Material, restitution: float, friction: FrictionLaw):
+        journal, bearing_length = parameters.pop("journal_radius"), parameters.pop("bearing_length")
+        return cls(
+            journal_radius=journal,
+            bearing_inner_radius=journal + parameters.pop("radial_clearance"),
+            bearing_outer_radius=parameters.pop("bearing_outer_radius"),
+            journal_length=bearing_length + parameters.pop("axial_clearance"),
+            bearing_length=bearing_length,
+            journal_material=inner_material,
+            bearing_material=outer_material,
+            restitution=restitution,
+            friction=friction,
+            **parameters,  # exponents, stiffnesses, radial_law, dissipation
+        )
+
     # -- parameters -----------------------------------------------------------------
     @property
     def radial_clearance(self) -> float:
-        """c_r = R_b1 - R_j (m)."""
-        return self._r_b1 - self._r_j
+        """c_r = R_b1 - R_j (m); as given when built from scene keys."""
+        return self.given("radial_clearance", self._r_b1 - self._r_j)
 
     @property
     def axial_clearance(self) -> float:
-        """c_a = L_j - L_b (m), total (c_a / 2 per side when centred)."""
-        return self._l_j - self._l_b
+        """c_a = L_j - L_b (m), total (c_a / 2 per side when centred); as given when built from scene keys."""
+        return self.given("axial_clearance", self._l_j - self._l_b)
+
+    @property
+    def scene_parameters(self) -> dict[str, float | str]:
+        """As :attr:`ClearanceJoint.scene_parameters`; a radial law other than ``"linear"`` sets its
+        own stiffness and exponent, so they are not reported (the joint rebuilds from these keys)."""
+        out = super().scene_parameters
+        if self._radial_law.name != "linear":
+            for key in ("radial_stiffness", "radial_exponent"):
+                if key not in self._given_parameters():
+                    out.pop(key, None)
+        return out
+
+    def candidate_clearances(self) -> np.ndarray:
+        """(4,) [c_r, c_a, c_r, c_a] in the candidates' order."""
+        return np.array([self.radial_clearance, self.axial_clearance] * 2)
 
     @property
     def journal_radius(self) -> float:
@@ -1172,10 +1183,6 @@ class RevoluteClearanceJoint:
     @property
     def bearing_material(self) -> Material:
         return self._bearing_material
-
-    @property
-    def restitution(self) -> float:
-        return self._restitution
 
     @property
     def radial_exponent(self) -> float:
@@ -1215,15 +1222,6 @@ class RevoluteClearanceJoint:
         """Accepted for the contract; unused (see the module docstring)."""
         return self._k_point
 
-    @property
-    def friction(self) -> FrictionLaw:
-        return self._friction
-
-    @property
-    def friction_in_kernel(self) -> bool:
-        """True if ``kernel`` applies the friction law (a built-in law); False for a user-defined one."""
-        return self._friction_code != FRICTION_EXTERNAL
-
     def __repr__(self) -> str:
         return (
             f"RevoluteClearanceJoint(journal_radius={self._r_j!r}, bearing_inner_radius={self._r_b1!r}, "
@@ -1241,82 +1239,23 @@ class RevoluteClearanceJoint:
         """Radial penetration of the slice with eccentricity (ex, ey); beta = R_j |t|^2."""
         return _slice_penetration(ex, ey, tx, ty, beta, self._r_j, self._r_b1)
 
-    def penetration(
-        self,
-        outer_rotation: ArrayLike,
-        outer_position: ArrayLike,
-        inner_rotation: ArrayLike,
-        inner_position: ArrayLike,
-    ) -> np.ndarray:
-        """(4,) deepest penetration (m) of [top_radial, top_axial, bottom_radial, bottom_axial].
-
-        Positive = contact.  Cheap (for event functions): no velocities, no forces.
-        Runs :func:`revolute_penetration_kernel`.
-        """
-        outer_rotation = state_array("outer_rotation", outer_rotation, ROTATION_SHAPE)
-        inner_rotation = state_array("inner_rotation", inner_rotation, ROTATION_SHAPE)
-        out = np.empty(_K)
-        status = revolute_penetration_kernel(
-            self.kernel_parameters,
-            outer_rotation,
-            state_array("outer_position", outer_position, VECTOR_SHAPE),
-            inner_rotation,
-            state_array("inner_position", inner_position, VECTOR_SHAPE),
-            out,
-        )
-        if status != STATUS_OK:
-            self._raise_tilt(outer_rotation, inner_rotation)
-        return out
-
-    @staticmethod
-    def _raise_tilt(outer_rotation: np.ndarray, inner_rotation: np.ndarray) -> None:
+    def _status_error(self, status: int, state: tuple, out: np.ndarray) -> ContactError:
+        """Adds ``STATUS_AXIS_TILT``: the angle between the axes; else as :meth:`ClearanceJoint._status_error`."""
+        if status != STATUS_AXIS_TILT and not (status == STATUS_NONFINITE_INPUT and state[2] is None):
+            return super()._status_error(status, state, out)
+        # the penetration kernel reports NaN rotations as a tilt (its only check)
+        outer_rotation, inner_rotation = state[0], state[3]
         dz = float(outer_rotation[:, 2] @ inner_rotation[:, 2])
         if not math.isfinite(dz):
-            raise ContactError(f"non-finite pose (u_b . u_j = {dz!r}): check for NaN or inf in the rotations")
+            return ContactError(f"non-finite pose (u_b . u_j = {dz!r}): check for NaN or inf in the rotations")
         angle = math.degrees(math.acos(max(-1.0, min(1.0, dz))))
-        raise ContactError(
+        return ContactError(
             f"journal axis at {angle:.4f} deg from the bearing axis (u_b . u_j = {dz!r}): a journal "
             "cannot turn by 90 deg in its bearing; check that both frames' z axes point the same way"
         )
 
-    # -- evaluation -----------------------------------------------------------------
-    def evaluate(
-        self,
-        outer_rotation: ArrayLike,
-        outer_position: ArrayLike,
-        outer_twist: ArrayLike,
-        inner_rotation: ArrayLike,
-        inner_position: ArrayLike,
-        inner_twist: ArrayLike,
-        onset_rates: ArrayLike,
-    ) -> JointContact:
-        """Contact state and wrenches (module docstring for the equations).
-
-        ``outer_*`` is the bearing, ``inner_*`` the journal: rotations (3, 3) frame ->
-        world, positions (3,), twists (6,) = [v, w] of the frame origin in world axes;
-        ``onset_rates`` (4,) the approach rates recorded at the onset of the current
-        impact of each candidate (floored by the L-N law).  Runs :func:`revolute_kernel`;
-        the returned arrays are views of one fresh output array.  Raises ValueError for
-        wrong shapes, :class:`~clearance_contact.errors.ContactError` for NaN / inf
-        input or a journal turned by 90 deg or more.
-        """
-        state = joint_state(outer_rotation, outer_position, outer_twist, inner_rotation, inner_position, inner_twist, onset_rates, _K)
-        out = np.empty(OUTPUT_SIZE)
-        status = revolute_kernel(self.kernel_parameters, *state, out)
-        if status == STATUS_EXTERNAL_FRICTION:
-            self._apply_external_friction(state[1], state[4], out)
-        elif status == STATUS_AXIS_TILT:
-            self._raise_tilt(state[0], state[3])
-        elif status == STATUS_NONFINITE_INPUT:
-            raise ContactError(nonfinite_state_message(STATE_NAMES, state))
-        elif status != STATUS_OK:
-            raise ContactError(
-                f"non-finite penetration {out[PENETRATION:PENETRATION_RATE].tolist()!r}: check the poses "
-                "(NaN or inf input, or overflow)"
-            )
-        return JointContact.from_output(self, out)
-
-    def _apply_external_friction(self, outer_position: np.ndarray, inner_position: np.ndarray, out: np.ndarray) -> None:
+    # -- evaluation (ClearanceJoint.evaluate / penetration run the kernels) ---------------
+    def _apply_external_friction(self, state: tuple, out: np.ndarray) -> None:
         """Finish :func:`revolute_kernel`'s ``STATUS_EXTERNAL_FRICTION`` output with the user's friction law.
 
         The kernel left the tangential slip v_t in ``friction_force`` and w_n r_s in
@@ -1354,6 +1293,32 @@ class RevoluteClearanceJoint:
             out[i + 1] = fty
             out[i + 2] = ftz
             out[SPIN_TORQUE + k] = t_spin
-        revolute_wrenches(outer_position, inner_position, out)
+        revolute_wrenches(state[1], state[4], out)
 
+    # -- drawing ----------------------------------------------------------------------
+    @classmethod
+    def magnified(cls, geometry, factor: float) -> dict[str, float]:
+        """Gaps times ``factor``; the bearing's outer radius moves with its bore (wall thickness true)."""
+        out = super().magnified(geometry, factor)
+        out["bearing_outer_radius"] += out["radial_clearance"] - float(geometry["radial_clearance"])
+        return out
 
+    @classmethod
+    def drawing(cls, geometry) -> tuple[Shape, ...]:
+        """Bearing tube (bore R_j + c_r), journal between two flanges L_b + c_a apart (flange radius R_b2)."""
+        journal, bearing_length = geometry["journal_radius"], geometry["bearing_length"]
+        bore, outer = journal + geometry["radial_clearance"], geometry["bearing_outer_radius"]
+        half = 0.5 * (bearing_length + geometry["axial_clearance"])
+        thickness = 0.1 * bearing_length
+        shapes = [
+            Shape("outer", "bearing", "tube", radius=outer, inner_radius=bore, length=bearing_length, opacity=0.4),
+            Shape("inner", "journal", "cylinder", radius=journal, length=2 * half + 2 * thickness),
+        ]
+        for name, sign in (("flange_top", 1.0), ("flange_bottom", -1.0)):
+            centre = (0.0, 0.0, sign * (half + 0.5 * thickness))
+            shapes.append(Shape("inner", name, "cylinder", radius=outer, length=thickness, centre=centre, opacity=0.35))
+        return tuple(shapes)
+
+    @classmethod
+    def inner_radius(cls, geometry) -> float:
+        return float(geometry["journal_radius"])

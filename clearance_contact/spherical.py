@@ -76,7 +76,6 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numpy.typing import ArrayLike
 
 from .compiled import (
     STATUS_EXTERNAL_FRICTION,
@@ -88,29 +87,20 @@ from .compiled import (
     norm3,
     jit,
 )
-from .errors import (
-    STATE_NAMES,
-    VECTOR_SHAPE,
-    ContactError,
-    ContactParameterError,
-    joint_state,
-    nonfinite_state_message,
-    require_positive,
-    state_array,
-)
+from .errors import ContactParameterError, require_positive
 from .friction import (
-    require_friction_law,
     FRICTION_EXTERNAL,
     FRICTION_PARAMETERS,
     FrictionLaw,
     NoFriction,
     encoded_force_over_speed,
-    friction_encoding,
 )
+from .joint import ClearanceJoint, Shape, output_layout
 from .materials import Material, hertz_sphere_stiffness, require_material
 from .dissipation import DEFAULT_DISSIPATION, DISSIPATION_PARAMETERS, dissipation_encoding, encoded_damping_factor
 from .normal_force import validate_normal_law
-from .result import KIND_NONE, KIND_POINT, JointContact
+from .registry import register_joint_type
+from .result import KIND_NONE, KIND_POINT
 
 __all__ = ["SphericalClearanceJoint", "spherical_kernel", "spherical_penetration_kernel", "spherical_wrenches"]
 
@@ -125,20 +115,21 @@ _P_FRICTION = 6  # kind code, then FRICTION_PARAMETERS values
 _P_DISSIPATION = _P_FRICTION + 1 + FRICTION_PARAMETERS  # code, then DISSIPATION_PARAMETERS values
 _N_PARAMETERS = _P_DISSIPATION + 1 + DISSIPATION_PARAMETERS
 
-# -- out layout (k = 1 candidate, r = 1 eccentricity row) -----------------------------
+# -- out layout (k = 1 candidate, r = 1 eccentricity row): joint.output_layout ------------
 _K = 1
-PENETRATION = 0
-PENETRATION_RATE = PENETRATION + _K
-NORMAL_FORCE = PENETRATION_RATE + _K
-NORMAL = NORMAL_FORCE + _K
-POINT_OUTER = NORMAL + 3 * _K
-POINT_INNER = POINT_OUTER + 3 * _K
-FRICTION_FORCE = POINT_INNER + 3 * _K
-ECCENTRICITY = FRICTION_FORCE + 3 * _K
-WRENCH_OUTER = ECCENTRICITY + 3
-WRENCH_INNER = WRENCH_OUTER + 6
-KIND = WRENCH_INNER + 6
-OUTPUT_SIZE = KIND + _K
+_LAYOUT = output_layout(_K, 1)
+PENETRATION = _LAYOUT["PENETRATION"]
+PENETRATION_RATE = _LAYOUT["PENETRATION_RATE"]
+NORMAL_FORCE = _LAYOUT["NORMAL_FORCE"]
+NORMAL = _LAYOUT["NORMAL"]
+POINT_OUTER = _LAYOUT["POINT_OUTER"]
+POINT_INNER = _LAYOUT["POINT_INNER"]
+FRICTION_FORCE = _LAYOUT["FRICTION_FORCE"]
+ECCENTRICITY = _LAYOUT["ECCENTRICITY"]
+WRENCH_OUTER = _LAYOUT["WRENCH_OUTER"]
+WRENCH_INNER = _LAYOUT["WRENCH_INNER"]
+KIND = _LAYOUT["KIND"]
+OUTPUT_SIZE = _LAYOUT["OUTPUT_SIZE"]
 
 
 @jit
@@ -306,10 +297,8 @@ def spherical_penetration_kernel(parameters, outer_rotation, outer_position, inn
     return STATUS_OK
 
 
-_ROTATION_UNUSED = np.eye(3)  # the spherical penetration does not depend on the rotations
-
-
-class SphericalClearanceJoint:
+@register_joint_type
+class SphericalClearanceJoint(ClearanceJoint):
     """Ball (inner element) in a spherical socket (outer element) with clearance.
 
     Parameters
@@ -332,44 +321,29 @@ class SphericalClearanceJoint:
         K in N/m^n, range (0, inf).  ``None``: Hertz internal sphere stiffness from
         the radii and materials, which requires ``exponent == 1.5``.
 
+    Joint type ``"spherical"`` (:mod:`~clearance_contact.registry`); scene keys
+    ``ball_radius``, ``clearance`` (c = R_s - R_b), ``exponent``, ``stiffness``, ``dissipation`` (a name).
     Compiled interface (module docstring, ``docs/contact-api.md``): ``kernel``,
     ``penetration_kernel``, ``kernel_parameters``, ``output_size`` and the offsets
     ``PENETRATION, PENETRATION_RATE, NORMAL_FORCE, NORMAL, POINT_OUTER, POINT_INNER,
     FRICTION_FORCE, ECCENTRICITY, WRENCH_OUTER, WRENCH_INNER, KIND`` (and
-    ``N_CANDIDATES = 1``, ``N_ECCENTRICITY = 1``).
+    ``N_CANDIDATES = 1``, ``N_ECCENTRICITY = 1``) from :class:`~clearance_contact.joint.ClearanceJoint`.
     """
 
-    __slots__ = (
-        "_ball_radius",
-        "_socket_radius",
-        "_clearance",
-        "_ball_material",
-        "_socket_material",
-        "_restitution",
-        "_exponent",
-        "_stiffness",
-        "_friction",
-        "_force_over_speed",
-        "_friction_code",
-        "_dissipation",
-        "kernel_parameters",
-    )
+    __slots__ = ("_ball_radius", "_socket_radius", "_clearance", "_ball_material", "_socket_material", "_exponent", "_stiffness", "_dissipation")
 
-    n_candidates: int = 1
-    N_CANDIDATES: int = _K
-    N_ECCENTRICITY: int = 1
-    PENETRATION: int = PENETRATION
-    PENETRATION_RATE: int = PENETRATION_RATE
-    NORMAL_FORCE: int = NORMAL_FORCE
-    NORMAL: int = NORMAL
-    POINT_OUTER: int = POINT_OUTER
-    POINT_INNER: int = POINT_INNER
-    FRICTION_FORCE: int = FRICTION_FORCE
-    ECCENTRICITY: int = ECCENTRICITY
-    WRENCH_OUTER: int = WRENCH_OUTER
-    WRENCH_INNER: int = WRENCH_INNER
-    KIND: int = KIND
-    output_size: int = OUTPUT_SIZE
+    type_name = "spherical"
+    N_CANDIDATES = _K
+    N_ECCENTRICITY = 1
+    SITE_KINDS = ("spherical",)
+    SCENE_KEYS = ("ball_radius", "clearance", "exponent", "stiffness", "dissipation")
+    NAME_KEYS = ("dissipation",)
+    REQUIRED_KEYS = ("ball_radius", "clearance")
+    GEOMETRY_KEYS = ("ball_radius", "clearance")
+    GAP_KEYS = ("clearance",)
+    DEFAULT_GEOMETRY = {"ball_radius": 0.015, "clearance": 1.0e-4}
+    KERNEL_ID = 0
+    PENETRATION_USES_ROTATIONS = False  # delta = |b - s| - c
     kernel = KernelAttribute(spherical_kernel)
     penetration_kernel = staticmethod(spherical_penetration_kernel)
 
@@ -394,7 +368,7 @@ class SphericalClearanceJoint:
             )
         require_material("ball_material", ball_material)
         require_material("socket_material", socket_material)
-        require_friction_law(friction)
+        code, friction_parameters = self._wire_friction(friction)
         if stiffness is None:
             if exponent != 1.5:
                 raise ContactParameterError(
@@ -412,10 +386,6 @@ class SphericalClearanceJoint:
         self._restitution = ce
         self._exponent = n
         self._stiffness = k
-        self._friction = friction
-        self._force_over_speed = getattr(friction, "force_over_speed", None)
-        code, friction_parameters = friction_encoding(friction)
-        self._friction_code = code
         parameters = np.zeros(_N_PARAMETERS)
         parameters[_P_BALL_RADIUS] = r_b
         parameters[_P_SOCKET_RADIUS] = r_s
@@ -429,11 +399,20 @@ class SphericalClearanceJoint:
         self._dissipation = dissipation
         self.kernel_parameters = parameters
 
+    @classmethod
+    def _from_scene(cls, parameters: dict, outer_material: Material, inner_material: Material, restitution: float, friction: FrictionLaw):
+        ball = parameters["ball_radius"]
+        return cls(
+            ball, ball + parameters["clearance"], inner_material, outer_material, restitution,
+            parameters.get("exponent", 1.5), friction, parameters.get("stiffness"),
+            parameters.get("dissipation", DEFAULT_DISSIPATION),
+        )  # fmt: skip
+
     # -- parameters -----------------------------------------------------------------
     @property
     def clearance(self) -> float:
-        """Radial clearance c = R_s - R_b (m)."""
-        return self._clearance
+        """Radial clearance c = R_s - R_b (m); as given when built from scene keys."""
+        return self.given("clearance", self._clearance)
 
     @property
     def ball_radius(self) -> float:
@@ -452,10 +431,6 @@ class SphericalClearanceJoint:
         return self._socket_material
 
     @property
-    def restitution(self) -> float:
-        return self._restitution
-
-    @property
     def exponent(self) -> float:
         return self._exponent
 
@@ -469,14 +444,9 @@ class SphericalClearanceJoint:
         """Contact stiffness K (N/m^n)."""
         return self._stiffness
 
-    @property
-    def friction(self) -> FrictionLaw:
-        return self._friction
-
-    @property
-    def friction_in_kernel(self) -> bool:
-        """True if ``kernel`` applies the friction law (a built-in law); False for a user-defined one."""
-        return self._friction_code != FRICTION_EXTERNAL
+    def candidate_clearances(self) -> np.ndarray:
+        """(1,) the clearance c."""
+        return np.array([self.clearance])
 
     def __repr__(self) -> str:
         return (
@@ -486,66 +456,38 @@ class SphericalClearanceJoint:
             f"stiffness={self._stiffness!r}, dissipation={self._dissipation!r})"
         )
 
-    # -- evaluation -----------------------------------------------------------------
-    def penetration(
-        self,
-        outer_rotation: ArrayLike,
-        outer_position: ArrayLike,
-        inner_rotation: ArrayLike,
-        inner_position: ArrayLike,
-    ) -> np.ndarray:
-        """(1,) penetration delta = |b - s| - c (m), > 0 in contact.  Cheap (events)."""
-        out = np.empty(_K)
-        outer_position = state_array("outer_position", outer_position, VECTOR_SHAPE)
-        inner_position = state_array("inner_position", inner_position, VECTOR_SHAPE)
-        status = spherical_penetration_kernel(
-            self.kernel_parameters, _ROTATION_UNUSED, outer_position, _ROTATION_UNUSED, inner_position, out
+    # -- evaluation (ClearanceJoint.evaluate / penetration run the kernels) ---------------
+    def _apply_external_friction(self, state: tuple, out: np.ndarray) -> None:
+        """Finish :func:`spherical_kernel`'s ``STATUS_EXTERNAL_FRICTION`` output: the user's law on the slip v_t."""
+        force_n = float(out[NORMAL_FORCE])
+        if force_n > 0.0:  # friction_force holds the slip v_t
+            slip = out[FRICTION_FORCE : FRICTION_FORCE + 3].copy()
+            if self._force_over_speed is not None:
+                friction = -self._force_over_speed(force_n, math.hypot(*slip.tolist())) * slip
+            else:
+                friction = np.asarray(self._friction.force(force_n, slip), dtype=float)
+            out[FRICTION_FORCE : FRICTION_FORCE + 3] = friction
+        spherical_wrenches(self.kernel_parameters, out)
+
+    # -- drawing ----------------------------------------------------------------------
+    @classmethod
+    def drawing(cls, geometry) -> tuple[Shape, ...]:
+        """Translucent socket of radius R_b + c around the ball."""
+        ball = geometry["ball_radius"]
+        return (
+            Shape("outer", "socket", "sphere", radius=ball + geometry["clearance"], opacity=0.3),
+            Shape("inner", "ball", "sphere", radius=ball),
         )
-        if status != STATUS_OK:
-            raise ContactError(
-                f"non-finite penetration {out.tolist()!r}: check the poses (NaN or inf input): "
-                f"outer_position={outer_position.tolist()!r}, inner_position={inner_position.tolist()!r}"
-            )
-        return out
 
-    def evaluate(
-        self,
-        outer_rotation: ArrayLike,
-        outer_position: ArrayLike,
-        outer_twist: ArrayLike,
-        inner_rotation: ArrayLike,
-        inner_position: ArrayLike,
-        inner_twist: ArrayLike,
-        onset_rates: ArrayLike,
-    ) -> JointContact:
-        """Contact state and wrenches (see the module docstring for the equations).
+    @classmethod
+    def inner_radius(cls, geometry) -> float:
+        return float(geometry["ball_radius"])
 
-        ``outer_*`` is the socket, ``inner_*`` the ball; rotations (3, 3) frame ->
-        world, positions (3,), twists (6,) = [v, w] of the frame origin in world
-        axes; ``onset_rates`` (1,) is the approach rate recorded at the onset of
-        the current impact (floored by the L-N law).  Runs :func:`spherical_kernel`;
-        the returned arrays are views of one fresh output array.  Raises
-        :class:`~clearance_contact.errors.ContactError` for NaN / inf input.
-        """
-        state = joint_state(outer_rotation, outer_position, outer_twist, inner_rotation, inner_position, inner_twist, onset_rates, _K)
-        out = np.empty(OUTPUT_SIZE)
-        parameters = self.kernel_parameters
-        status = spherical_kernel(parameters, *state, out)
-        if status == STATUS_EXTERNAL_FRICTION:  # user-defined friction law, applied here
-            force_n = float(out[NORMAL_FORCE])
-            if force_n > 0.0:  # friction_force holds the slip v_t
-                slip = out[FRICTION_FORCE : FRICTION_FORCE + 3].copy()
-                if self._force_over_speed is not None:
-                    friction = -self._force_over_speed(force_n, math.hypot(*slip.tolist())) * slip
-                else:
-                    friction = np.asarray(self._friction.force(force_n, slip), dtype=float)
-                out[FRICTION_FORCE : FRICTION_FORCE + 3] = friction
-            spherical_wrenches(parameters, out)
-        elif status == STATUS_NONFINITE_INPUT:
-            raise ContactError(nonfinite_state_message(STATE_NAMES, state))
-        elif status != STATUS_OK:
-            raise ContactError(
-                f"non-finite penetration {out[PENETRATION]!r}: check the poses (NaN or inf input, or overflow): "
-                f"outer_position={state[1].tolist()!r}, inner_position={state[4].tolist()!r}"
-            )
-        return JointContact.from_output(self, out)
+    @classmethod
+    def geometry_from_result(cls, eccentricity: np.ndarray, penetration: np.ndarray) -> dict[str, float]:
+        """The clearance |e| - delta (median over the finite records), if positive."""
+        if np.ndim(eccentricity) != 2 or np.shape(eccentricity)[1] != 3:
+            return {}
+        values = np.linalg.norm(eccentricity, axis=1) - np.asarray(penetration).reshape(len(eccentricity), -1)[:, 0]
+        values = values[np.isfinite(values)]
+        return {"clearance": float(np.median(values))} if values.size and np.median(values) > 0 else {}

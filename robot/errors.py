@@ -1,9 +1,20 @@
-"""The library's exceptions. Each message says what is wrong and how to fix it."""
+"""The library's exceptions. Each message says what is wrong and how to fix it.
+
+One root for the whole project: :class:`Error` (``clearance_contact``'s
+``ClearanceMechanismsError``), with ``key`` and ``value`` fields naming the
+offending input. ``RobotError`` (this package) and ``ContactError`` (the contact
+layer) derive from it.
+"""
 
 from __future__ import annotations
 
+from clearance_contact.errors import ClearanceMechanismsError
 
-class RobotError(Exception):
+#: the root of every error of this project
+Error = ClearanceMechanismsError
+
+
+class RobotError(ClearanceMechanismsError):
     """Base class of every error raised by the ``robot`` package."""
 
 
@@ -39,5 +50,22 @@ class ResultFileError(RobotError, ValueError):
     """A result file is missing, malformed or from another mechanism."""
 
 
-class SimulationError(RobotError):
-    """A simulation could not proceed (raised internally; runs report it in their result)."""
+class InitialStateError(KinematicsError, ValueError):
+    """The initial positions or velocities a scene asks for cannot be met by the mechanism."""
+
+
+class RobotWarning(UserWarning):
+    """Base class of the warnings issued by the ``robot`` package."""
+
+
+class RedundantConstraintWarning(RobotWarning):
+    """Some constraint equations are linearly dependent on the others (an overconstrained mechanism).
+
+    The motion is exact (solved on the independent equations); the multipliers of
+    the redundant set are not unique and are reported by a convention
+    (``docs/dynamics.md``, "Redundant constraints").
+    """
+
+
+class InitialStateWarning(RobotWarning):
+    """A given initial coordinate had to be corrected to satisfy the constraints."""

@@ -1,28 +1,29 @@
 """From a scene to a result: build the model the scene needs, set the initial state, integrate.
 
 The data flow is one way: scene (TOML) + URDF -> :class:`Run` (mechanism,
-dynamics model, initial state) -> :class:`robot.simulation.Trajectory` ->
-:class:`robot.results.SimulationResult` -> result file.
+dynamics model, initial state) -> :class:`robot.integration.simulation.Trajectory` ->
+:class:`robot.io.results.Result` -> result file.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Callable
+import math
+from typing import Any, Callable, Mapping
 
 import numpy as np
 import pinocchio as pin
 
-from . import dynamics as D
-from .errors import SceneError
-from .initial_state import initial_state
-from .mechanism import Mechanism, build_mechanism
-from .platform_kinematics import PlatformLayout, inverse_kinematics
-from .results import SimulationResult, make_result, mechanism_fingerprint
-from .scene import Scene, load_scene, misalignment_rotation
-from .simulation import integrate
-from .trajectory import POSE_COORDINATES, FourierCoordinate, JointTrajectory, PlatformTrajectory, reference_platform_motion
+from robot.dynamics import equations as D
+from robot.errors import SceneError
+from robot.model.initial_state import initial_state
+from robot.model.mechanism import Mechanism, build_mechanism
+from robot.model.platform_kinematics import PlatformLayout, inverse_kinematics
+from robot.io.results import Result, make_result, mechanism_fingerprint
+from robot.scene.loader import Scene, load_scene, misalignment_rotation
+from robot.integration.simulation import integrate
+from robot.model.trajectory import POSE_COORDINATES, FourierCoordinate, JointTrajectory, PlatformTrajectory, reference_platform_motion
 
 
 @dataclass(frozen=True, eq=False)
@@ -72,7 +73,7 @@ def build_run(scene: Scene | str | Path, **overrides) -> Run:
     """Build the mechanism with exactly the scene's clearance joints, its dynamics and initial state."""
     if not isinstance(scene, Scene):
         scene = load_scene(scene, **overrides)
-    mechanism = build_mechanism(scene.mechanism_path, {c.joint: c.outer_on for c in scene.clearances})
+    mechanism = build_mechanism(scene.mechanism_path, {c.joint: c.outer_on for c in scene.clearances}, scene.gravity)
     drive, layout = make_drive(scene, mechanism)
     if not mechanism.model.existFrame(scene.end_effector):
         raise SceneError(f"scene {scene.name}: end_effector={scene.end_effector!r} is not a frame of the mechanism")
@@ -85,31 +86,28 @@ def build_run(scene: Scene | str | Path, **overrides) -> Run:
     else:
         q_guess = pin.neutral(mechanism.model)
     misalignment = {joint: misalignment_rotation(angle) for joint, angle in scene.misalignment_deg.items()}
-    y0 = initial_state(mechanism, q_guess, drive.drive(0.0), misalignment)
+    y0 = initial_state(mechanism, q_guess, drive.drive(0.0), misalignment, scene.initial_positions, scene.initial_velocities)
     return Run(scene, mechanism, dynamics, y0, layout)
 
 
-GEOMETRY_KEYS = {
-    1: ("ball_radius", "clearance"),
-    4: ("journal_radius", "radial_clearance", "bearing_outer_radius", "bearing_length", "axial_clearance"),
-}
-
-
 def clearance_geometry(law) -> dict[str, float]:
-    """Element dimensions of a clearance joint, with the scene file's key names."""
-    return {key: float(getattr(law, key)) for key in GEOMETRY_KEYS[law.n_candidates]}
+    """Element dimensions of a clearance joint with the scene file's key names, as given (its type's ``GEOMETRY_KEYS``)."""
+    return law.geometry
 
 
-def run_scene(run: Run, progress: Callable[[float], None] | None = None) -> SimulationResult:
+def run_scene(run: Run, progress: Callable[[float], None] | None = None) -> Result:
     """Integrate a built run and compute its outputs (never raises on divergence: see ``status``)."""
     scene = run.scene
     trajectory = integrate(run.dynamics, run.y0, run.t_span, scene.solver, scene.limits, progress)
     metadata = {
         "mechanism": str(scene.mechanism_path.name),
+        "mechanism_path": str(scene.mechanism_path),
         "urdf_sha256": mechanism_fingerprint(run.mechanism.description.urdf_text),
         "clearance": list(scene.clearance_joints),
         "clearance_outer_on": {c.joint: c.outer_on for c in scene.clearances},
+        "clearance_type": {c.joint: c.law.type_name for c in scene.clearances},
         "clearance_geometry": {c.joint: clearance_geometry(c.law) for c in scene.clearances},
+        "clearance_parameters": {c.joint: c.law.scene_parameters for c in scene.clearances},
         "scene_file": str(scene.path.name) if scene.path else None,
         "method": scene.solver.method,
         "rtol": scene.solver.rtol,
@@ -123,3 +121,32 @@ def run_scene(run: Run, progress: Callable[[float], None] | None = None) -> Simu
         "nv": run.mechanism.model.nv,
     }
     return make_result(scene.name, run.dynamics, trajectory, metadata)
+
+
+def simulate(
+    scene: Scene | str | Path,
+    overrides: Mapping[str, Any] | None = None,
+    *,
+    t_end: float | None = None,
+    progress: Callable[[float], None] | None = None,
+) -> Result:
+    """Run a scene and return its :class:`~robot.io.results.Result` (the public entry point).
+
+    ``scene``: a :class:`Scene` (from :func:`robot.load_scene`), a shipped scene's
+    name or a path to a scene file; ``overrides``: key paths and values applied
+    before validation (``{"clearance.R1.radial_clearance": 2e-4}``);
+    ``t_end``: simulated seconds (the scene's ``duration`` otherwise).
+    Bad input raises :class:`robot.errors.SceneError` (a subclass of
+    :class:`robot.Error`) before any integration; a run that stops (divergence,
+    interrupt) is returned with ``status`` -1, its ``cause`` and every record up
+    to the stop.
+    """
+    if t_end is not None and not (isinstance(t_end, (int, float)) and math.isfinite(t_end) and t_end > 0):
+        raise SceneError(f"t_end={t_end!r} must be a finite number of seconds > 0", key="t_end", value=t_end)
+    if not isinstance(scene, Scene):
+        scene = load_scene(scene)
+    changes = {**(overrides or {}), **({"duration": t_end} if t_end is not None else {})}
+    if changes:
+        scene = scene.with_changes(changes)
+    return run_scene(build_run(scene), progress)
+

@@ -21,8 +21,8 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from robot.cli import exit_on_error  # noqa: E402
-from robot.visualization import AnimationSummary, export_html, serve_live, wait_forever  # noqa: E402
+from robot.cli.common import exit_on_error  # noqa: E402
+from robot.viz.animation import AnimationSummary, export_html, serve_live, wait_forever  # noqa: E402
 
 
 def describe(summary: AnimationSummary) -> str:

@@ -30,7 +30,7 @@ import numpy as np
 
 from clearance_contact import STEEL, BrownMcPheeFriction, SphericalClearanceJoint
 from clearance_contact.compiled import JIT_ENABLED
-from robot.atomic import atomic_write_text
+from robot.io.atomic import atomic_write_text
 
 DEFAULT_OUT = Path(__file__).resolve().parents[1] / "results" / "bench_contact.json"
 FRICTION = BrownMcPheeFriction(static_coefficient=0.08, dynamic_coefficient=0.05, transition_velocity=1e-3)

@@ -5,8 +5,8 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from robot.atomic import atomic_write_text
-from robot.ups_rps_design import ups_rps_urdf
+from robot.io.atomic import atomic_write_text
+from robot.model.ups_rps_design import ups_rps_urdf
 
 DEFAULT_PATH = Path(__file__).resolve().parents[1] / "urdf" / "ups_rps.urdf"
 

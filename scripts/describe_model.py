@@ -16,8 +16,8 @@ if str(ROOT) not in sys.path:  # run as a file from a checkout without installin
     sys.path.insert(0, str(ROOT))
 
 from robot.errors import RobotError  # noqa: E402
-from robot.mechanism import build_mechanism  # noqa: E402
-from robot.summary import describe  # noqa: E402
+from robot.model.mechanism import build_mechanism  # noqa: E402
+from robot.model.summary import describe  # noqa: E402
 
 DEFAULT_URDF = ROOT / "urdf" / "ups_rps.urdf"
 

@@ -14,8 +14,8 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from robot.cli import exit_on_error  # noqa: E402
-from robot.paper import run_study, write_outputs  # noqa: E402
+from robot.cli.common import exit_on_error  # noqa: E402
+from robot.analysis.paper import run_study, write_outputs  # noqa: E402
 
 
 def main() -> int:
@@ -29,7 +29,7 @@ def main() -> int:
     for path in write_outputs(results, args.out):
         print(f"wrote {path}")
     if not args.no_animation:
-        from robot.visualization import export_html
+        from robot.viz.animation import export_html
 
         # clearance motion is sub-millimetre: magnify it 150x and play at a tenth of real time
         summary = export_html(args.out / "compound_misaligned.npz", args.out / "compound_misaligned.html", exaggerate=150.0, speed=0.1)

@@ -14,10 +14,10 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from robot.cli import exit_on_error, progress_bar  # noqa: E402
-from robot.results import save_result  # noqa: E402
+from robot.cli.common import exit_on_error, progress_bar  # noqa: E402
+from robot.io.results import save_result  # noqa: E402
 from robot.run import build_run, run_scene  # noqa: E402
-from robot.scene import shipped_scenes  # noqa: E402
+from robot.scene.loader import shipped_scenes  # noqa: E402
 
 
 def main() -> int:

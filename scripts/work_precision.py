@@ -36,16 +36,16 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 import numpy as np  # noqa: E402
 import scipy  # noqa: E402
 
-from robot.atomic import atomic_write_text  # noqa: E402
-from robot.cli import exit_on_error  # noqa: E402
-from robot.integrators import JACOBIAN_METHODS, METHODS  # noqa: E402
+from robot.io.atomic import atomic_write_text  # noqa: E402
+from robot.cli.common import exit_on_error  # noqa: E402
+from robot.integration.solvers import JACOBIAN_METHODS, METHODS  # noqa: E402
 from robot.run import build_run  # noqa: E402
-from robot.simulation import SolverOptions  # noqa: E402
-from robot.state_jacobian import STRUCTURED  # noqa: E402
-from robot.scene import shipped_scenes  # noqa: E402
-from robot.studies import speed, stability  # noqa: E402
-from robot.studies.common import simulate  # noqa: E402
-from robot.studies import work_precision as wp  # noqa: E402
+from robot.integration.simulation import SolverOptions  # noqa: E402
+from robot.dynamics.state_jacobian import STRUCTURED  # noqa: E402
+from robot.scene.loader import shipped_scenes  # noqa: E402
+from robot.analysis.studies import speed, stability  # noqa: E402
+from robot.analysis.studies.common import simulate  # noqa: E402
+from robot.analysis.studies import work_precision as wp  # noqa: E402
 
 
 def _json_default(value):

@@ -9,7 +9,7 @@ from pathlib import Path
 
 import pytest
 
-from robot import dynamics as D
+from robot.dynamics import equations as D
 
 
 class PythonOnlyLaw:

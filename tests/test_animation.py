@@ -1,8 +1,8 @@
-"""Animation export (robot.visualization, scripts/animate.py): fast checks, no browser.
+"""Animation export (robot.viz.animation, scripts/animate.py): fast checks, no browser.
 
 Results are made here without integrating (poses from the platform inverse
 kinematics plus a prescribed motion inside the clearance joints) and written
-with robot.results.save_result, so these tests do not depend on the
+with robot.io.results.save_result, so these tests do not depend on the
 simulator's speed; one test animates a real short simulation.
 """
 
@@ -21,11 +21,11 @@ import pytest
 import umsgpack
 
 from robot.errors import ResultFileError
-from robot.mechanism import build_mechanism
-from robot.platform_kinematics import PlatformLayout, inverse_kinematics
-from robot.results import SimulationResult, load_result, mechanism_fingerprint, save_result
-from robot.trajectory import reference_platform_motion
-from robot.visualization import (
+from robot.model.mechanism import build_mechanism
+from robot.model.platform_kinematics import PlatformLayout, inverse_kinematics
+from robot.io.results import SimulationResult, load_result, mechanism_fingerprint, save_result
+from robot.model.trajectory import reference_platform_motion
+from robot.viz.animation import (
     AnimationError,
     AnimationOptions,
     _exaggerated_inner,
@@ -173,10 +173,10 @@ def test_revolute_tilt_is_magnified_through_its_tangent():
     tilt, spin = 1e-3, 0.7
     relative = pin.SE3(pin.exp3(np.array([0.0, tilt, 0.0])) @ pin.exp3(np.array([0.0, 0.0, spin])), np.array([1e-5, 0.0, 2e-5]))
     inner = outer * relative
-    drawn = outer.actInv(_exaggerated_inner(outer, inner, "revolute", 100.0))
+    drawn = outer.actInv(_exaggerated_inner(outer, inner, True, 100.0))
     assert math.acos(drawn.rotation[2, 2]) == pytest.approx(math.atan(100 * math.tan(tilt)), rel=1e-9)
     np.testing.assert_allclose(drawn.translation, 100 * relative.translation, atol=1e-12)
-    unchanged = outer.actInv(_exaggerated_inner(outer, inner, "revolute", 1.0))
+    unchanged = outer.actInv(_exaggerated_inner(outer, inner, True, 1.0))
     np.testing.assert_allclose(unchanged.rotation, relative.rotation, atol=1e-12)
 
 
@@ -266,15 +266,16 @@ def test_real_short_simulation_animates(tmp_path):
     summary = export_html(path, tmp_path / "spherical.html", speed=0.01, exaggerate=100)
     assert summary.n_frames == frame_count(0.0, float(load_result(path)["t"][-1]), 0.01, 30)
     assert summary.sizes["S1"].source == "result metadata"
-    assert summary.sizes["S1"].clearance == pytest.approx(1.0e-4)
+    assert summary.sizes["S1"].values["clearance"] == 1.0e-4  # as the scene gave it, not R_s - R_b
 
 
 def test_arrows_sit_at_the_contact_law_points():
     from clearance_contact import STEEL, RevoluteClearanceJoint
 
-    from robot.visualization import ElementSizes, _contacts, _drawing_law, _law_contacts
+    from robot.viz.animation import ElementSizes, _drawing_law, _law_contacts
 
-    size = ElementSizes("revolute", 0.02, 1e-4, 0.035, 0.04, 1e-4)
+    geometry = {"journal_radius": 0.02, "radial_clearance": 1e-4, "bearing_outer_radius": 0.035, "bearing_length": 0.04, "axial_clearance": 1e-4}
+    size = ElementSizes("revolute", geometry)
     law = _drawing_law(size, 1.0)
     assert isinstance(law, RevoluteClearanceJoint) and law.journal_length == pytest.approx(0.0401)
     outer = pin.SE3(pin.exp3(np.array([0.1, 0.2, 0.3])), np.array([0.1, 0.2, 0.3]))
@@ -286,16 +287,16 @@ def test_arrows_sit_at_the_contact_law_points():
     for j in range(4):
         np.testing.assert_allclose(drawn[j][0], 0.5 * (reference.point_inner[j] + reference.point_outer[j]), atol=1e-12)
         np.testing.assert_allclose(drawn[j][1], -reference.normal[j], atol=1e-12)
-    # the geometric fallback (no contact library) agrees on the force directions when the axes are parallel
-    shifted = outer * pin.SE3(np.eye(3), np.array([1.2e-4, 0.3e-4, 0.2e-4]))
-    for (_, exact), (_, approximate) in zip(_law_contacts(law, outer, shifted), _contacts("revolute", size, outer, shifted, 1.0)):
-        np.testing.assert_allclose(approximate, exact, atol=1e-9)
+    # magnified by k: the gaps grow k-fold, the bearing wall keeps its true thickness
+    magnified = _drawing_law(size, 7.0)
+    assert magnified.radial_clearance == pytest.approx(7e-4) and magnified.axial_clearance == pytest.approx(7e-4)
+    assert magnified.bearing_outer_radius - magnified.bearing_inner_radius == pytest.approx(0.035 - 0.0201)
 
 
 def test_live_server_serves_the_scene():
     import urllib.request
 
-    from robot.visualization import serve_live
+    from robot.viz.animation import serve_live
 
     vis, summary = serve_live(synthetic_result(["S1"], n=5), speed=0.1)
     try:

@@ -38,7 +38,7 @@ import sys
 import numpy as np
 import pytest
 
-from robot.visualization import export_html
+from robot.viz.animation import export_html
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from test_animation import write_result  # noqa: E402  (the synthetic results of the fast tests)

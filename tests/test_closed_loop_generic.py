@@ -16,13 +16,13 @@ import numpy as np
 import pinocchio as pin
 import pytest
 
-from robot import constraints as C
-from robot import kinematics as K
-from robot.description import parse_mechanism
+from robot.model import constraints as C
+from robot.model import kinematics as K
+from robot.model.description import parse_mechanism
 from robot.errors import ClearanceChoiceError, UnreachablePoseError
-from robot.mechanism import build_mechanism
-from robot.platform_kinematics import PlatformLayout
-from robot.summary import grubler_kutzbach, summarize
+from robot.model.mechanism import build_mechanism
+from robot.model.platform_kinematics import PlatformLayout
+from robot.model.summary import grubler_kutzbach, summarize
 
 DATA = Path(__file__).resolve().parent / "data"
 RSSR = DATA / "rssr.urdf"

@@ -2,9 +2,12 @@
 
 from __future__ import annotations
 
+import json
+
 import numpy as np
 import pytest
 
+from clearance_contact import STEEL, Material, NoFriction, RevoluteClearanceJoint, joint_type
 from clearance_contact.dissipation import dissipation_factor
 from robot.errors import SceneError
 from robot.run import build_run, run_scene
@@ -104,13 +107,46 @@ def test_scene_chooses_the_models(tmp_path) -> None:
 
 
 @pytest.mark.parametrize(
-    ("extra", "message"),
+    ("extra", "message", "key", "value"),
     [
-        ('dissipation = "kelvin_voigt"', r"clearance 'R1'.*dissipation='kelvin_voigt' is not known; valid: lankarani_nikravesh"),
-        ('radial_law = "hertz"', r"clearance 'R1'.*radial_law='hertz' is not known; valid: linear, johnson"),
-        ('radial_law = "pereira"\nradial_stiffness = 1e9', r"radial_law='pereira' sets its own stiffness"),
+        ('dissipation = "kelvin_voigt"', r"clearance 'R1'.*dissipation='kelvin_voigt' is not known; valid: lankarani_nikravesh", "dissipation", "kelvin_voigt"),
+        ('radial_law = "hertz"', r"clearance 'R1'.*radial_law='hertz' is not known; valid: linear, johnson", "radial_law", "hertz"),
+        ("radial_law = 1.5", r"clearance 'R1'.*radial_law=1.5 must be a name", "radial_law", 1.5),
+        ('dissipation = ""', r"clearance 'R1'.*dissipation='' must be a name", "dissipation", ""),
+        ('radial_law = "pereira"\nradial_stiffness = 1e9', r"radial_law='pereira' sets its own stiffness", None, None),
     ],
 )
-def test_bad_model_names_give_scene_errors(tmp_path, extra, message) -> None:
-    with pytest.raises(SceneError, match=message):
+def test_bad_model_names_give_scene_errors(tmp_path, extra, message, key, value) -> None:
+    with pytest.raises(SceneError, match=message) as caught:
         load_scene(_scene(tmp_path, extra=extra))
+    assert (caught.value.key, caught.value.value) == (key, value)
+
+
+def test_model_names_are_recorded_with_the_scene_parameters(tmp_path) -> None:
+    """The names are scene keys of the types (NAME_KEYS): recorded as given, else the law's own name."""
+    scene = load_scene(_scene(tmp_path, extra='dissipation = "hunt_crossley"\nradial_law = "pereira"'))
+    laws = {c.joint: c.law for c in scene.clearances}
+    r1, s1 = laws["R1"].scene_parameters, laws["S1"].scene_parameters
+    assert (r1["radial_law"], r1["dissipation"], r1["radial_clearance"]) == ("pereira", "hunt_crossley", 1.0e-4)
+    assert s1["dissipation"] == "lankarani_nikravesh"  # not given: the joint's default, by name
+    direct = RevoluteClearanceJoint(0.01, 0.0101, 0.02, 0.0301, 0.03, STEEL, STEEL, radial_law="johnson")
+    assert direct.scene_parameters["radial_law"] == "johnson" and "radial_stiffness" not in direct.scene_parameters
+    json.dumps(r1), json.dumps(direct.scene_parameters)  # result metadata: plain numbers and names
+
+
+@pytest.mark.parametrize("law", ["linear", "johnson", "pereira", "hertz_point"])
+@pytest.mark.parametrize("dissipation", ["lankarani_nikravesh", "gonthier"])
+def test_joint_rebuilds_from_its_scene_parameters(law, dissipation) -> None:
+    """What a result records (scene_parameters) rebuilds the same law (the animation does so)."""
+    material = Material(youngs_modulus=7.0e10, poisson_ratio=0.33)
+    given = {
+        "journal_radius": 0.012, "radial_clearance": 2.0e-4, "bearing_outer_radius": 0.02, "bearing_length": 0.025,
+        "axial_clearance": 3.0e-4, "radial_law": law, "dissipation": dissipation,
+    }  # fmt: skip
+    revolute = joint_type("revolute")
+    first = revolute.from_scene(given, material, STEEL, 0.7, NoFriction())
+    direct = RevoluteClearanceJoint(0.012, 0.0122, 0.02, 0.0253, 0.025, STEEL, material, 0.7, radial_law=law, dissipation=dissipation)
+    for joint in (first, direct):
+        again = revolute.from_scene(joint.scene_parameters, material, STEEL, 0.7, NoFriction())
+        np.testing.assert_allclose(again.kernel_parameters, first.kernel_parameters, rtol=1e-12)
+        assert again.scene_parameters["radial_law"] == law and again.dissipation == dissipation

@@ -27,8 +27,8 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 PACKAGE = ROOT / "robot"
 DYNAMICS_DOC = ROOT / "docs" / "dynamics.md"
-RESULTS = PACKAGE / "results.py"
-SIMULATION = PACKAGE / "simulation.py"
+RESULTS = PACKAGE / "io" / "results.py"
+SIMULATION = PACKAGE / "integration" / "records.py"  # the record kinds' module
 #: modules outside robot/ the simulation can get a cause from (none today; robot/ is scanned whole)
 EXTRA_SOURCES: tuple[Path, ...] = ()
 CAUSE_NAMES = {"cause", "failure_cause"}

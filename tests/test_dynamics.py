@@ -6,10 +6,10 @@ import numpy as np
 import pinocchio as pin
 import pytest
 
-from robot import constraints as C
-from robot import dynamics as D
-from robot import kinematics as K
-from robot.platform_kinematics import inverse_kinematics
+from robot.model import constraints as C
+from robot.dynamics import equations as D
+from robot.model import kinematics as K
+from robot.model.platform_kinematics import inverse_kinematics
 from robot.run import build_run, run_scene
 
 

@@ -9,7 +9,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from robot.results import load_result
+from robot.io.results import load_result
 from robot.run import build_run, run_scene
 
 ROOT = Path(__file__).resolve().parents[1]

@@ -14,10 +14,10 @@ import numpy as np
 import pytest
 from scipy.integrate import RK45, solve_ivp
 
-from robot import dynamics as D
-from robot.results import make_result
+from robot.dynamics import equations as D
+from robot.io.results import make_result
 from robot.run import build_run
-from robot.simulation import SolverOptions, RECORD_FORCE_PEAK, RECORD_ONSET, RECORD_PEAK, RECORD_START, RECORD_STEP, integrate
+from robot.integration.simulation import SolverOptions, RECORD_FORCE_PEAK, RECORD_ONSET, RECORD_PEAK, RECORD_START, RECORD_STEP, integrate
 
 T_END = 0.0105  # past the first impact's penetration maximum
 # an explicit Runge-Kutta method (its earlier steps are replayed exactly): the tests check the

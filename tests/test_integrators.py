@@ -1,9 +1,9 @@
 """The fast right-hand side equals the reference computations; the added integrators work.
 
 * ``ConstraintKernel`` (views, one Jacobian call, float 3-vectors) = ``residual``,
-  ``jacobian``, ``gamma`` of ``robot.constraints``, for spherical-only, mixed and
+  ``jacobian``, ``gamma`` of ``robot.model.constraints``, for spherical-only, mixed and
   revolute-only constraint sets;
-* ``state_derivative`` (compiled path of ``robot.rhs_kernels``, with compiled
+* ``state_derivative`` (compiled path of ``robot.dynamics.rhs_kernels``, with compiled
   or Python contact laws; table drive; tangent map) = the reference
   composition, in and out of contact;
 * ``evaluate``, ``configuration_rate``, ``contact_probe`` = their reference forms;
@@ -22,14 +22,14 @@ import pinocchio as pin
 import pytest
 
 from clearance_contact import ContactError
-from robot import constraints as C
-from robot import dynamics as D
-from robot import integrators as I
-from robot.mechanism import build_mechanism
+from robot.model import constraints as C
+from robot.dynamics import equations as D
+from robot.integration import solvers as I
+from robot.model.mechanism import build_mechanism
 from robot.run import build_run
-from robot.scene import misalignment_rotation
-from robot.simulation import RECORD_OUTPUT, SolverOptions, integrate
-from robot.studies.speed import reference_state_derivative
+from robot.scene.loader import misalignment_rotation
+from robot.integration.simulation import RECORD_OUTPUT, SolverOptions, integrate
+from robot.analysis.studies.speed import reference_state_derivative
 
 from conftest import assert_passes_as_plain_python
 
@@ -136,7 +136,7 @@ def test_compiled_right_hand_side_covers_the_shipped_scenes():
 
 
 def test_placement_buffer_follows_pinocchio_data(misaligned):
-    from robot.rhs_kernels import placement_buffer
+    from robot.dynamics.rhs_kernels import placement_buffer
 
     model = misaligned.mechanism.model
     data = model.createData()
@@ -162,7 +162,7 @@ def test_compiled_sites_report_a_failing_law_with_its_message(misaligned):
 
 
 def test_compiled_right_hand_side_runs_as_plain_python():
-    """``CLEARANCE_CONTACT_JIT=0``: the kernels of ``robot.rhs_kernels`` run as Python, same answers."""
+    """``CLEARANCE_CONTACT_JIT=0``: the kernels of ``robot.dynamics.rhs_kernels`` run as Python, same answers."""
     assert_passes_as_plain_python(__file__, "state_derivative_equals_reference or placement_buffer", 3)
 
 

@@ -16,12 +16,12 @@ import numpy as np
 import pinocchio as pin
 import pytest
 
-from robot import constraints as C
-from robot import kinematics as K
-from robot.description import parse_mechanism
+from robot.model import constraints as C
+from robot.model import kinematics as K
+from robot.model.description import parse_mechanism
 from robot.errors import SingularConfigurationError, StrokeLimitError, UnreachablePoseError
-from robot.mechanism import build_mechanism
-from robot.platform_kinematics import (
+from robot.model.mechanism import build_mechanism
+from robot.model.platform_kinematics import (
     PlatformLayout,
     actuation_jacobian,
     condition_number,
@@ -30,8 +30,8 @@ from robot.platform_kinematics import (
     leg_kinematics,
     platform_state,
 )
-from robot.trajectory import reference_platform_motion
-from robot.ups_rps_design import UpsRpsDesign, ups_rps_urdf
+from robot.model.trajectory import reference_platform_motion
+from robot.model.ups_rps_design import UpsRpsDesign, ups_rps_urdf
 
 ROOT = Path(__file__).resolve().parents[1]
 URDF = ROOT / "urdf" / "ups_rps.urdf"
@@ -339,7 +339,7 @@ def test_reference_trajectory_stays_well_conditioned_and_inside_the_strokes(idea
 )
 def test_mobility_matches_grubler_kutzbach(choice, free, driven):
     """nv - rank(Phi_q) at an assembled pose = 6*15 - (constraints) (docs/kinematics.md)."""
-    from robot.summary import grubler_kutzbach
+    from robot.model.summary import grubler_kutzbach
 
     mechanism = build_mechanism(URDF, clearance=choice)
     layout = PlatformLayout.from_mechanism(mechanism)

@@ -13,13 +13,13 @@ import pinocchio as pin
 import pytest
 import yourdfpy
 
-from robot import constraints as C
-from robot import kinematics as K
-from robot.description import parse_mechanism
+from robot.model import constraints as C
+from robot.model import kinematics as K
+from robot.model.description import parse_mechanism
 from robot.errors import ClearanceChoiceError, MechanismFileError
-from robot.mechanism import build_mechanism
-from robot.summary import describe, grubler_kutzbach, summarize
-from robot.ups_rps_design import UpsRpsDesign, ups_rps_urdf
+from robot.model.mechanism import build_mechanism
+from robot.model.summary import describe, grubler_kutzbach, summarize
+from robot.model.ups_rps_design import UpsRpsDesign, ups_rps_urdf
 
 ROOT = Path(__file__).resolve().parents[1]
 URDF = ROOT / "urdf" / "ups_rps.urdf"
@@ -89,7 +89,7 @@ def test_clearance_choice_builds_the_right_coordinates(choice, nq, nv, closures,
 def test_clearance_element_frames_sit_on_the_ideal_joint():
     """At the assembled, centred home pose each site's outer and inner frames coincide, on the
     ideal joint: S1 at the platform origin, R1 at the base centre with z along world y."""
-    from robot.platform_kinematics import PlatformLayout, inverse_kinematics
+    from robot.model.platform_kinematics import PlatformLayout, inverse_kinematics
 
     mechanism = build_mechanism(URDF, clearance="R1,S1")
     model = mechanism.model

@@ -10,7 +10,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from robot.paper import SCENES, acceleration_rms_deviation, run_study, summary, transient_duration, write_outputs
+from robot.analysis.paper import SCENES, acceleration_rms_deviation, run_study, summary, transient_duration, write_outputs
 
 ROOT = Path(__file__).resolve().parents[1]
 

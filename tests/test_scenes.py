@@ -7,9 +7,9 @@ import pytest
 
 from robot.errors import SceneError
 from robot.run import build_run, run_scene
-from robot.scene import load_scene, shipped_scenes
-from robot.simulation import SolverOptions
-from robot.studies.work_precision import DRIFT_TARGET
+from robot.scene.loader import load_scene, shipped_scenes
+from robot.integration.simulation import SolverOptions
+from robot.analysis.studies.work_precision import DRIFT_TARGET
 from robot.validation.settings import with_solver
 
 
@@ -85,6 +85,16 @@ def test_user_scene_by_path(tmp_path):
         ('extends = "ideal"\nmechanism = "nowhere.urdf"\n', "does not exist"),
         ("this is not toml", "not valid TOML"),
         ('extends = "ideal"\n[initial]\nmisalignment_deg = { R1 = 0.035 }\n', "not a revolute clearance joint"),
+        (
+            'extends = "ideal"\n[[clearance]]\njoint = "S1"\ntype = "revolute"\njournal_radius = 0.02\nradial_clearance = 1e-4\n'
+            "bearing_outer_radius = 0.03\nbearing_length = 0.04\naxial_clearance = 1e-4\n",
+            "clearance 'S1': type='revolute' cannot replace 'S1', a spherical closure",
+        ),
+        (
+            'extends = "ideal"\n[[clearance]]\njoint = "R1"\ntype = "spherical"\nball_radius = 0.015\nclearance = 1e-4\n',
+            "clearance 'R1': type='spherical' cannot replace 'R1', a revolute joint",
+        ),
+        ('extends = "ideal"\n[[clearance]]\njoint = "S1"\ntype = "spherical"\nball_radius = 0.015\n', "missing required key 'clearance'"),
     ],
 )
 def test_bad_scene_files_give_clear_errors(tmp_path, text, message):
@@ -93,6 +103,20 @@ def test_bad_scene_files_give_clear_errors(tmp_path, text, message):
     with pytest.raises(SceneError, match=None) as info:
         load_scene(str(path))
     assert message in str(info.value)
+
+
+def test_clearances_are_reported_as_given():
+    """radial_clearance = 1e-4 is stored as a bore radius journal + 1e-4, but reported as 1e-4 exactly."""
+    from robot.run import clearance_geometry
+
+    scene = load_scene("compound")
+    laws = {c.joint: c.law for c in scene.clearances}
+    revolute = laws["R1"]
+    assert revolute.bearing_inner_radius - revolute.journal_radius != 1e-4  # the subtraction does not round-trip
+    assert revolute.radial_clearance == 1e-4 and revolute.axial_clearance == 1e-4
+    assert clearance_geometry(revolute)["radial_clearance"] == 1e-4
+    assert clearance_geometry(laws["S1"]) == {"ball_radius": 0.015, "clearance": 1e-4}
+    np.testing.assert_array_equal(revolute.candidate_clearances(), [1e-4, 1e-4, 1e-4, 1e-4])
 
 
 def test_unknown_scene_name():

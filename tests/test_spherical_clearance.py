@@ -223,7 +223,10 @@ def test_invariance_under_rigid_motion(config, q, d, v_common, w_common) -> None
     assert b.penetration[0] == pytest.approx(a.penetration[0], abs=1e-15)
     # |e| ~ 1e-4 m is a difference of positions ~ 1 m: the normal carries ~1e-12 rounding
     assert b.penetration_rate[0] == pytest.approx(a.penetration_rate[0], abs=1e-10)
-    assert b.normal_force[0] == pytest.approx(a.normal_force[0], rel=1e-6, abs=1e-9 * force_scale)
+    # at a grazing depth (~1e-15 m) the force is as sensitive as F ~ delta^n makes it to the
+    # 1e-15 m rounding of the depth itself: allow dF/d(delta) times that rounding
+    rounding = 1.5 * a.normal_force[0] / a.penetration[0] * 2e-15 if a.penetration[0] > 0.0 else 0.0
+    assert b.normal_force[0] == pytest.approx(a.normal_force[0], rel=1e-6, abs=1e-9 * force_scale + rounding)
     if abs(a.penetration[0]) > 1e-12:  # on the boundary, rounding decides
         assert np.array_equal(b.kind, a.kind)
     np.testing.assert_allclose(b.eccentricity, a.eccentricity, atol=1e-15)  # socket-frame quantity

@@ -14,11 +14,11 @@ import dataclasses
 import numpy as np
 import pytest
 
-from robot.dynamics import Baumgarte
+from robot.dynamics.equations import Baumgarte
 from robot.run import build_run
-from robot.simulation import FAILED, FailureLimits, SolverOptions, integrate
-from robot.studies import stability
-from robot.studies.common import simulate
+from robot.integration.simulation import FAILED, FailureLimits, SolverOptions, integrate
+from robot.analysis.studies import stability
+from robot.analysis.studies.common import simulate
 
 # blown-up trial states make numpy and scipy warn on their way to the reported failure
 pytestmark = pytest.mark.filterwarnings("ignore::RuntimeWarning")
@@ -101,7 +101,7 @@ def test_wall_time_limit(misaligned):
 def test_hidden_contact_guard_finds_an_impact_inside_a_step():
     """Penetration < 0 at both ends of a step, > 0 inside: the guard samples the dense
     output and returns the onset (the first zero crossing)."""
-    from robot.simulation import _hidden_contact
+    from robot.integration.events import hidden_contact
 
     def dense(t):
         return np.array([t])
@@ -110,9 +110,9 @@ def test_hidden_contact_guard_finds_an_impact_inside_a_step():
         depth = 1e-6 - 1e-3 * (y[0] - 0.45) ** 2
         return np.array([depth]), np.array([-2e-3 * (y[0] - 0.45)]), 0.0
 
-    found = _hidden_contact(dense, probe, 0, 0.0, 1.0, samples=20)
+    found = hidden_contact(lambda t: probe(t, dense(t))[0][0], 0.0, 1.0, samples=20)
     assert found == pytest.approx(0.45 - np.sqrt(1e-3), abs=1e-12)
-    assert _hidden_contact(dense, lambda t, y: (np.array([-1.0]), np.array([0.0]), 0.0), 0, 0.0, 1.0) is None
+    assert hidden_contact(lambda t: -1.0, 0.0, 1.0) is None
 
 
 def test_hidden_contact_guard_in_a_run(misaligned):

@@ -1,4 +1,4 @@
-"""The structured Jacobian of the state derivative (``robot.state_jacobian``).
+"""The structured Jacobian of the state derivative (``robot.dynamics.state_jacobian``).
 
 * its stiff blocks (accelerations and powers against positions and velocities,
   in contact) equal a central-difference Jacobian of the right-hand side;
@@ -19,13 +19,13 @@ import pinocchio as pin
 import pytest
 
 from clearance_contact import ContactError
-from robot import dynamics as D
-from robot import state_jacobian as SJ
+from robot.dynamics import equations as D
+from robot.dynamics import state_jacobian as SJ
 from robot.errors import SceneError
 from robot.run import build_run
-from robot.scene import load_scene
-from robot.simulation import SolverOptions, integrate
-from robot.studies.speed import sample_states
+from robot.scene.loader import load_scene
+from robot.integration.simulation import SolverOptions, integrate
+from robot.analysis.studies.speed import sample_states
 
 from conftest import assert_passes_as_plain_python
 
@@ -83,7 +83,7 @@ def test_stiff_stabilisation_blocks_equal_central_differences(misaligned, states
 
 
 def test_compiled_kernels_run_as_plain_python():
-    """``CLEARANCE_CONTACT_JIT=0``: ``robot.jacobian_kernels`` run as Python, same checks pass."""
+    """``CLEARANCE_CONTACT_JIT=0``: ``robot.dynamics.jacobian_kernels`` run as Python, same checks pass."""
     assert_passes_as_plain_python(__file__, "stiff_blocks or quaternion_scale", 3)
 
 

@@ -14,7 +14,7 @@ import pinocchio as pin
 import pytest
 
 from robot.run import build_run, run_scene
-from robot.scene import load_scene
+from robot.scene.loader import load_scene
 from robot.validation import comparison as CMP
 from robot.validation import newton_euler as NE
 from robot.validation import study

@@ -1,4 +1,4 @@
-"""Cross-checks of the Lagrange-multiplier model (``robot.dynamics``) against two other formulations.
+"""Cross-checks of the Lagrange-multiplier model (``robot.dynamics.equations``) against two other formulations.
 
 The seed paper validates its Lagrange model against ADAMS and against the
 Newton-Euler method. This package does both:
@@ -9,10 +9,11 @@ Newton-Euler method. This package does both:
   Newton-Euler equations of each body, the joint reactions as unknown
   multipliers of constraint equations written out in absolute coordinates
   (:mod:`.absolute_constraints`), solved as an augmented (index-1, Baumgarte)
-  system at every right-hand-side evaluation and integrated with its own
-  event-driven loop (:mod:`.event_loop`). It shares with the Lagrange model only
+  system at every right-hand-side evaluation and integrated with the Lagrange
+  model's event-driven step loop (:mod:`robot.integration.event_loop`, through
+  :mod:`.event_loop`). It shares with the Lagrange model only
   the geometry input (the URDF, read by :mod:`.bodies`), the contact layer
-  (``clearance_contact``), the prescribed actuator histories (``robot.trajectory``)
+  (``clearance_contact``), the prescribed actuator histories (``robot.model.trajectory``)
   and the initial state (mapped from Pinocchio coordinates to absolute ones).
 * :mod:`.exudyn_model`: the same mechanism built in Exudyn (an independent C++
   multibody code, the role ADAMS plays in the paper): rigid bodies with Euler

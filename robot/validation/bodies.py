@@ -27,7 +27,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..description import MechanismDescription
+from robot.model.description import MechanismDescription
 
 
 def rpy_matrix(rpy) -> np.ndarray:

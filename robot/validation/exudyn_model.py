@@ -5,14 +5,14 @@ redundant-coordinate multibody code: Lagrange multipliers, index-3 constraints,
 implicit generalized-alpha integration. Only the geometry input
 (:mod:`.bodies`), the initial state (the Lagrange run's ``y0`` mapped to
 absolute coordinates, :func:`.newton_euler.initial_state`), the prescribed
-actuator lengths (``robot.trajectory``) and the contact law
+actuator lengths (``robot.model.trajectory``) and the contact law
 (``clearance_contact``) are shared; Exudyn builds and solves its own equations.
 
 Model
 -----
 * Every moving link is an ``ObjectRigidBody`` on a ``NodeRigidBodyEP`` (Euler
   parameters) placed at its centre of mass, link axes as body axes; gravity is a
-  ``LoadMassProportional`` (-9.81 m/s^2 along z).
+  ``LoadMassProportional`` (the run's gravity: the scene's ``gravity``, default -9.81 m/s^2 along z).
 * Revolute joints (``U*_x``, ``U*_y``, ``R1``): ``GenericJoint`` with marker
   frames whose z is the joint axis, ``constrainedAxes = [1,1,1,1,1,0]``.
   Spherical closures ``S*``: ``SphericalJoint``.
@@ -23,7 +23,7 @@ Model
   ``s_k``); the distance is set to ``s_k(t_{n+1})`` in a pre-step user function
   (Exudyn passes the end time of the step) and enforced at position level
   (index 3) at the end of the step. The driving force is the connector's
-  constraint force with the sign of ``robot.dynamics`` (positive pushes):
+  constraint force with the sign of ``robot.dynamics.equations`` (positive pushes):
   ``driving = -Force`` (the sign checked against the Lagrange model).
   The lengths ``s_k(t)`` come from :func:`actuator_lengths`.
   Why not a ``GenericJoint`` with all six axes locked and an ``offsetUserFunction``
@@ -71,13 +71,13 @@ from scipy.interpolate import CubicHermiteSpline
 
 from clearance_contact import ONSET_RATE_FLOOR
 
-from .. import constraints as C
-from ..kinematics import acceleration_analysis, assemble, velocity_analysis
-from ..scene import misalignment_rotation
-from ..mechanism import rotation_z_to
-from ..run import Run
-from . import newton_euler as NE
-from .bodies import read_geometry, rpy_matrix
+from robot.model import constraints as C
+from robot.model.kinematics import acceleration_analysis, assemble, velocity_analysis
+from robot.scene.loader import misalignment_rotation
+from robot.model.mechanism import rotation_z_to
+from robot.run import Run
+from robot.validation import newton_euler as NE
+from robot.validation.bodies import read_geometry, rpy_matrix
 
 #: spacing (s) of the exact actuator lengths the drive spline goes through
 DRIVE_TABLE_SPACING = 2e-4
@@ -129,7 +129,7 @@ def _ep_G(ep: np.ndarray) -> np.ndarray:
 def kinematic_accelerations(run: Run, geometry, t: float = 0.0) -> np.ndarray:
     """COM accelerations and Euler-parameter second derivatives (n, 7) of the ideal mechanism at time t.
 
-    Position, velocity and acceleration analysis (``robot.kinematics``) of the
+    Position, velocity and acceleration analysis (``robot.model.kinematics``) of the
     mechanism with its clearance joints replaced by the ideal joints (centred,
     with the scene's initial misalignment), driven by the prescribed lengths.
     """
@@ -262,125 +262,118 @@ class _ContactElement:
         return (np.concatenate(q), np.concatenate(q_t)) if q else (np.zeros(0), np.zeros(0))
 
 
-def simulate(run: Run, settings: ExudynSettings = ExudynSettings(), t_end: float | None = None) -> ExudynResult:
-    """Build the mechanism of ``run`` in Exudyn and integrate it over ``[0, t_end]``."""
-    import exudyn as exu
-    from exudyn import itemInterface as I
+class _ExudynMechanism:
+    """The mechanism of a run as Exudyn items: bodies, joints, closures, drives, contact elements."""
 
-    started = time.perf_counter()
-    t_end = run.scene.duration if t_end is None else t_end
-    ne = NE.build_model(run)  # geometry, element frames and laws only (no equations of motion)
-    geometry = read_geometry(run.mechanism.description)
-    y0 = NE.initial_state(ne, run)
-    r, p, v, w = ne.split(y0)
-    acc0 = kinematic_accelerations(run, geometry)
-    drive = run.dynamics.drive
-    lengths = actuator_lengths(drive, t_end)
-    actuated = list(run.mechanism.description.actuated_joints)
-    clearance = {c.joint for c in run.scene.clearances}
+    def __init__(self, exu, items, run: Run, ne, geometry):
+        self.exu, self.I, self.run, self.ne, self.geometry = exu, items, run, ne, geometry
+        self.container = exu.SystemContainer()  # owns the system: kept alive as long as this object
+        self.mbs = self.container.AddSystem()
+        self.ground = self.mbs.AddObject(items.ObjectGround())
+        self.nodes: list = []
+        self.bodies: list = []
+        self.references: dict = {}
+        self.drives: dict = {}
+        self.elements: list = []
+        self.com = {b.name: b.com for b in geometry.bodies}
+        self.com[geometry.ground] = np.zeros(3)
 
-    SC = exu.SystemContainer()
-    mbs = SC.AddSystem()
-    ground = mbs.AddObject(I.ObjectGround())
-    nodes, bodies, references = [], [], {}
-    for k, body in enumerate(geometry.bodies):
-        ep = p[k] / np.linalg.norm(p[k])
-        ep_t = 0.5 * _qmul(ep, np.concatenate([[0.0], w[k]]))
-        reference = np.concatenate([r[k], ep])
-        references[k] = reference
-        node = mbs.AddNode(I.NodeRigidBodyEP(referenceCoordinates=list(reference), initialVelocities=list(v[k]) + list(ep_t)))
-        J = body.inertia
-        obj = mbs.AddObject(
-            I.ObjectRigidBody(mass=body.mass, inertia=[J[0, 0], J[1, 1], J[2, 2], J[1, 2], J[0, 2], J[0, 1]], nodeNumber=node)
-        )
-        mbs.AddLoad(I.LoadMassProportional(markerNumber=mbs.AddMarker(I.MarkerBodyMass(bodyNumber=obj)), loadVector=list(NE.GRAVITY)))
-        nodes.append(node)
-        bodies.append(obj)
-    com = {b.name: b.com for b in geometry.bodies}
-    com[geometry.ground] = np.zeros(3)
-
-    def marker(link: str, xyz, rotation=np.eye(3)):
-        k = geometry.body_index(link)
-        owner = ground if k < 0 else bodies[k]
-        return mbs.AddMarker(
-            I.MarkerBodyRigid(bodyNumber=owner, localHT=exu.HT(rotation=np.asarray(rotation, float), translation=np.asarray(xyz, float) - com[link]))
-        )
-
-    drives = {}
-    s0 = drive.drive(0.0)[0]
-    for joint in geometry.joints:
-        if joint.kind == "floating" or joint.name in clearance:
-            continue
-        align = rotation_z_to(joint.axis)
-        m0 = marker(joint.parent, joint.origin_xyz, joint.origin_rotation @ align)
-        m1 = marker(joint.child, np.zeros(3), align)
-        if joint.kind in ("revolute", "continuous"):
-            mbs.AddObject(I.GenericJoint(markerNumbers=[m0, m1], constrainedAxes=[1, 1, 1, 1, 1, 0]))
-        elif joint.kind == "prismatic":
-            mbs.AddObject(I.GenericJoint(markerNumbers=[m0, m1], constrainedAxes=[1, 1, 0, 1, 1, 1]))
-            if joint.name in actuated:
-                k = actuated.index(joint.name)
-                hinge0, hinge1 = marker(joint.parent, joint.origin_xyz), marker(joint.child, np.zeros(3))
-                drives[k] = mbs.AddObject(I.ObjectConnectorDistance(markerNumbers=[hinge0, hinge1], distance=float(s0[k])))
-        else:
-            raise NotImplementedError(f"joint {joint.name!r} of type {joint.kind!r}")
-    for closure in run.mechanism.description.closures:
-        if closure.name in clearance:
-            continue
-        a, b = closure.parent, closure.child
-        mbs.AddObject(
-            I.SphericalJoint(markerNumbers=[marker(a.link, a.xyz, rpy_matrix(a.rpy)), marker(b.link, b.xyz, rpy_matrix(b.rpy))], constrainedAxes=[1, 1, 1])
-        )
-
-    elements = []
-    for site in ne.contacts:
-        element = _ContactElement(site, nodes, references)
-        size = 7 * len(element.nodes)
-        mbs.AddObject(
-            I.ObjectGenericODE2(
-                nodeNumbers=element.nodes,
-                massMatrix=np.zeros((size, size)),
-                forceUserFunction=element.force,
+    def add_bodies(self, y0: np.ndarray) -> None:
+        """Rigid bodies with Euler-parameter nodes at the run's initial state, and gravity."""
+        I, mbs = self.I, self.mbs
+        r, p, v, w = self.ne.split(y0)
+        for k, body in enumerate(self.geometry.bodies):
+            ep = p[k] / np.linalg.norm(p[k])
+            ep_t = 0.5 * _qmul(ep, np.concatenate([[0.0], w[k]]))
+            reference = np.concatenate([r[k], ep])
+            self.references[k] = reference
+            node = mbs.AddNode(I.NodeRigidBodyEP(referenceCoordinates=list(reference), initialVelocities=list(v[k]) + list(ep_t)))
+            J = body.inertia
+            obj = mbs.AddObject(
+                I.ObjectRigidBody(mass=body.mass, inertia=[J[0, 0], J[1, 1], J[2, 2], J[1, 2], J[0, 2], J[0, 1]], nodeNumber=node)
             )
-        )
-        elements.append(element)
+            mbs.AddLoad(I.LoadMassProportional(markerNumber=mbs.AddMarker(I.MarkerBodyMass(bodyNumber=obj)), loadVector=list(self.run.mechanism.model.gravity.linear)))
+            self.nodes.append(node)
+            self.bodies.append(obj)
 
-    ee_body, ee_local = bodies[ne.ee_body], list(ne.ee_offset)
-    log_t: list = []
-    log_ee: list = []
-    log_force: list = []
-    log_contact = {e.site.name: ([], []) for e in elements}
+    def marker(self, link: str, xyz, rotation=np.eye(3)):
+        k = self.geometry.body_index(link)
+        owner = self.ground if k < 0 else self.bodies[k]
+        local = self.exu.HT(rotation=np.asarray(rotation, float), translation=np.asarray(xyz, float) - self.com[link])
+        return self.mbs.AddMarker(self.I.MarkerBodyRigid(bodyNumber=owner, localHT=local))
 
-    def record(mbs, t, initial=False):
-        log_t.append(t)
-        log_ee.append(np.asarray(mbs.GetObjectOutputBody(ee_body, exu.OutputVariableType.Position, localPosition=ee_local)))
+    def add_joints(self, clearance: set, actuated: list, s0: np.ndarray) -> None:
+        """Ideal tree joints (generic joints), prescribed actuator distances on the actuated prismatic joints."""
+        I, mbs = self.I, self.mbs
+        for joint in self.geometry.joints:
+            if joint.kind == "floating" or joint.name in clearance:
+                continue
+            align = rotation_z_to(joint.axis)
+            m0 = self.marker(joint.parent, joint.origin_xyz, joint.origin_rotation @ align)
+            m1 = self.marker(joint.child, np.zeros(3), align)
+            if joint.kind in ("revolute", "continuous"):
+                mbs.AddObject(I.GenericJoint(markerNumbers=[m0, m1], constrainedAxes=[1, 1, 1, 1, 1, 0]))
+            elif joint.kind == "prismatic":
+                mbs.AddObject(I.GenericJoint(markerNumbers=[m0, m1], constrainedAxes=[1, 1, 0, 1, 1, 1]))
+                if joint.name in actuated:
+                    k = actuated.index(joint.name)
+                    hinge0, hinge1 = self.marker(joint.parent, joint.origin_xyz), self.marker(joint.child, np.zeros(3))
+                    self.drives[k] = mbs.AddObject(I.ObjectConnectorDistance(markerNumbers=[hinge0, hinge1], distance=float(s0[k])))
+            else:
+                raise NotImplementedError(f"joint {joint.name!r} of type {joint.kind!r}")
+
+    def add_closures(self, clearance: set) -> None:
+        for closure in self.run.mechanism.description.closures:
+            if closure.name in clearance:
+                continue
+            a, b = closure.parent, closure.child
+            markers = [self.marker(a.link, a.xyz, rpy_matrix(a.rpy)), self.marker(b.link, b.xyz, rpy_matrix(b.rpy))]
+            self.mbs.AddObject(self.I.SphericalJoint(markerNumbers=markers, constrainedAxes=[1, 1, 1]))
+
+    def add_contacts(self) -> None:
+        """Clearance joints as generic ODE2 objects whose user force is the project's contact law."""
+        for site in self.ne.contacts:
+            element = _ContactElement(site, self.nodes, self.references)
+            size = 7 * len(element.nodes)
+            self.mbs.AddObject(
+                self.I.ObjectGenericODE2(nodeNumbers=element.nodes, massMatrix=np.zeros((size, size)), forceUserFunction=element.force)
+            )
+            self.elements.append(element)
+
+
+class _Recorder:
+    """End-effector position, actuator forces and contact forces after each converged step."""
+
+    def __init__(self, built: _ExudynMechanism, n_actuators: int):
+        self.built, self.n_actuators = built, n_actuators
+        self.t: list = []
+        self.ee: list = []
+        self.force: list = []
+        self.contact = {e.site.name: ([], []) for e in built.elements}
+
+    def __call__(self, mbs, t: float, initial: bool = False) -> None:
+        built, exu = self.built, self.built.exu
+        self.t.append(t)
+        ee = mbs.GetObjectOutputBody(built.bodies[built.ne.ee_body], exu.OutputVariableType.Position, localPosition=list(built.ne.ee_offset))
+        self.ee.append(np.asarray(ee))
         if initial:
-            log_force.append(np.full(len(actuated), np.nan))
+            self.force.append(np.full(self.n_actuators, np.nan))
         else:
-            log_force.append(np.array([-mbs.GetObjectOutput(drives[k], exu.OutputVariableType.Force) for k in range(len(actuated))]))
-        for e in elements:
+            self.force.append(np.array([-mbs.GetObjectOutput(built.drives[k], exu.OutputVariableType.Force) for k in range(self.n_actuators)]))
+        for e in built.elements:
             q, q_t = e.node_state(mbs, exu)
             result, _, _ = e.evaluate(q, q_t)
             if not initial:  # after a converged step: candidates out of contact track their approach rate
                 out = result.penetration <= 0.0
                 e.onset[out] = np.maximum(result.penetration_rate[out], ONSET_RATE_FLOOR)
-            log_contact[e.site.name][0].append(result.normal_force.copy())
-            log_contact[e.site.name][1].append(result.penetration.copy())
+            self.contact[e.site.name][0].append(result.normal_force.copy())
+            self.contact[e.site.name][1].append(result.penetration.copy())
 
-    def pre_step(mbs, t):
-        s = lengths(t)  # t is the end of the step
-        for k, obj in drives.items():
-            mbs.SetObjectParameter(obj, "distance", float(s[k]))
-        return True
+    def contact_arrays(self) -> dict:
+        return {name: {"normal_force": np.array(f), "penetration": np.array(p)} for name, (f, p) in self.contact.items()}
 
-    def post_step(mbs, t):
-        if t > log_t[-1]:  # Exudyn also calls it once at the start time
-            record(mbs, t)
-        return True
 
-    mbs.SetPreStepUserFunction(pre_step)
-    mbs.SetPostStepUserFunction(post_step)
-    mbs.Assemble()
+def _simulation_settings(exu, settings: ExudynSettings, t_end: float):
     ss = exu.SimulationSettings()
     ti = ss.timeIntegration
     ti.numberOfSteps = int(round(t_end / settings.step_size))
@@ -394,7 +387,48 @@ def simulate(run: Run, settings: ExudynSettings = ExudynSettings(), t_end: float
     ti.verboseMode = settings.verbose
     ss.solution.file.write = False
     ss.show.computationTime = False
-    initial = consistent_accelerations(mbs, ss, acc0.ravel())
+    return ss
+
+
+def _install_step_functions(mbs, built: _ExudynMechanism, lengths, record: _Recorder) -> None:
+    def pre_step(mbs, t):
+        s = lengths(t)  # t is the end of the step
+        for k, obj in built.drives.items():
+            mbs.SetObjectParameter(obj, "distance", float(s[k]))
+        return True
+
+    def post_step(mbs, t):
+        if t > record.t[-1]:  # Exudyn also calls it once at the start time
+            record(mbs, t)
+        return True
+
+    mbs.SetPreStepUserFunction(pre_step)
+    mbs.SetPostStepUserFunction(post_step)
+
+
+def simulate(run: Run, settings: ExudynSettings = ExudynSettings(), t_end: float | None = None) -> ExudynResult:
+    """Build the mechanism of ``run`` in Exudyn and integrate it over ``[0, t_end]``."""
+    import exudyn as exu
+    from exudyn import itemInterface as I
+
+    started = time.perf_counter()
+    t_end = run.scene.duration if t_end is None else t_end
+    ne = NE.build_model(run)  # geometry, element frames and laws only (no equations of motion)
+    geometry = read_geometry(run.mechanism.description)
+    drive = run.dynamics.drive
+    actuated = list(run.mechanism.description.actuated_joints)
+    clearance = {c.joint for c in run.scene.clearances}
+    built = _ExudynMechanism(exu, I, run, ne, geometry)
+    built.add_bodies(NE.initial_state(ne, run))
+    built.add_joints(clearance, actuated, drive.drive(0.0)[0])
+    built.add_closures(clearance)
+    built.add_contacts()
+    record = _Recorder(built, len(actuated))
+    mbs = built.mbs
+    _install_step_functions(mbs, built, actuator_lengths(drive, t_end), record)
+    mbs.Assemble()
+    ss = _simulation_settings(exu, settings, t_end)
+    initial = consistent_accelerations(mbs, ss, kinematic_accelerations(run, geometry).ravel())
     mbs.systemData.SetODE2Coordinates_tt(list(initial), configuration=exu.ConfigurationType.Initial)
     record(mbs, 0.0, initial=True)
     success, message = True, "the integration reached the end time"
@@ -405,9 +439,8 @@ def simulate(run: Run, settings: ExudynSettings = ExudynSettings(), t_end: float
         success, message = False, f"{type(exc).__name__}: {exc}"
     wall = time.perf_counter() - started
     solve_time = time.perf_counter() - solve_started
-    contact = {
-        name: {"normal_force": np.array(forces), "penetration": np.array(pens)} for name, (forces, pens) in log_contact.items()
-    }
+    n = len(record.t)
     return ExudynResult(
-        success, message, settings, np.array(log_t), np.array(log_ee), np.array(log_force).reshape(len(log_t), -1), contact, wall, len(log_t) - 1, solve_time
+        success, message, settings, np.array(record.t), np.array(record.ee), np.array(record.force).reshape(n, -1),
+        record.contact_arrays(), wall, n - 1, solve_time,
     )

@@ -21,7 +21,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
-from . import comparison as CMP  # noqa: E402
+from robot.validation import comparison as CMP  # noqa: E402
 
 STYLE = {
     "lagrange": dict(color="black", linestyle="-", linewidth=1.4, label="Lagrange (Pinocchio)"),

@@ -33,7 +33,7 @@ stabilised acceleration constraint, each evaluation solves the augmented system
 (Schur-complement) form, exact for the block-diagonal ``M``:
 ``(Phi_q M^-1 Phi_q^T) lambda = Phi_q M^-1 Q - rhs``, ``a = M^-1 (Q - Phi_q^T lambda)``.
 ``Phi_dot = Phi_q [v; w'] + Phi_t``. The driving force of actuator k is
-``-lambda_k`` (positive: the actuator pushes), as in ``robot.dynamics``.
+``-lambda_k`` (positive: the actuator pushes), as in ``robot.dynamics.equations``.
 
 Clearance joints impose no constraint (the joint or closure is left out); the
 contact layer ``clearance_contact`` gives the wrenches ``[f, m]`` about each
@@ -46,20 +46,24 @@ forward kinematics (positions, rotations and velocities of the link frames).
 
 from __future__ import annotations
 
+import dataclasses
+import math
 import time
 from dataclasses import dataclass, field
 
 import numpy as np
 import pinocchio as pin
 
-from ..mechanism import rotation_z_to
-from ..run import Run
-from ..simulation import SolverOptions
-from .absolute_constraints import BodyStates, ConstraintSet, cross
-from .bodies import MechanismGeometry, read_geometry, rpy_matrix
-from .event_loop import EventRun, integrate_with_events
+from clearance_contact import ONSET_RATE_FLOOR
+from robot.model.mechanism import rotation_z_to
+from robot.run import Run
+from robot.integration.event_loop import ContactProbe
+from robot.integration.options import SolverOptions
+from robot.validation.absolute_constraints import BodyStates, ConstraintSet, cross
+from robot.validation.bodies import MechanismGeometry, read_geometry, rpy_matrix
+from robot.validation.event_loop import EventRun, run_events
 
-GRAVITY = np.array([0.0, 0.0, -9.81])
+GRAVITY = np.array([0.0, 0.0, -9.81])  # the default; a model uses its run's gravity (NewtonEulerModel.gravity)
 
 
 # --- quaternions (e0 scalar) -------------------------------------------------------------
@@ -133,6 +137,7 @@ class NewtonEulerModel:
     n_candidates: int
     rhs_calls: int = 0
     names: tuple[str, ...] = field(default_factory=tuple)
+    gravity: np.ndarray = field(default_factory=lambda: GRAVITY.copy())  # m/s^2, world axes (the scene's gravity)
     minv: np.ndarray = field(default=None, repr=False)  # (n, 6, 6) block inverses of M
     minv_rows: np.ndarray = field(default=None, repr=False)  # (rows, 2, 6, 6) M^-1 blocks of each row's bodies
 
@@ -181,6 +186,27 @@ def _element(geometry: MechanismGeometry, link: str, xyz, rotation) -> ElementFr
 def _perpendiculars(axis: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     frame = rotation_z_to(axis)
     return frame[:, 0], frame[:, 1]
+
+
+def _contact_sites(geometry: MechanismGeometry, description, clearances) -> tuple[ContactSiteNE, ...]:
+    """The clearance sites in the Lagrange model's order (closures first, then tree joints), candidates numbered alike."""
+    contacts, first = [], 0
+    closures = {c.name: c for c in description.closures}
+    ordered = [c for c in clearances if c.joint in closures] + [c for c in clearances if c.joint not in closures]
+    for spec in ordered:
+        if spec.joint in closures:
+            c = closures[spec.joint]
+            parent = _element(geometry, c.parent.link, c.parent.xyz, rpy_matrix(c.parent.rpy))
+            child = _element(geometry, c.child.link, c.child.xyz, rpy_matrix(c.child.rpy))
+        else:
+            joint = geometry.joint(spec.joint)
+            align = rotation_z_to(joint.axis)
+            parent = _element(geometry, joint.parent, joint.origin_xyz, joint.origin_rotation @ align)
+            child = _element(geometry, joint.child, np.zeros(3), align)
+        outer, inner = (child, parent) if spec.outer_on == "child" else (parent, child)
+        contacts.append(ContactSiteNE(spec.joint, spec.law, outer, inner, first))
+        first += spec.law.n_candidates
+    return tuple(contacts)
 
 
 def build_model(run: Run) -> NewtonEulerModel:
@@ -233,24 +259,7 @@ def build_model(run: Run) -> NewtonEulerModel:
         )
     cs.freeze(len(bodies))
 
-    # clearance sites in the Lagrange model's order (closures first, then tree joints)
-    contacts, first = [], 0
-    closures = {c.name: c for c in description.closures}
-    ordered = [c for c in scene.clearances if c.joint in closures] + [c for c in scene.clearances if c.joint not in closures]
-    for spec in ordered:
-        if spec.joint in closures:
-            c = closures[spec.joint]
-            parent = _element(geometry, c.parent.link, c.parent.xyz, rpy_matrix(c.parent.rpy))
-            child = _element(geometry, c.child.link, c.child.xyz, rpy_matrix(c.child.rpy))
-        else:
-            joint = geometry.joint(spec.joint)
-            align = rotation_z_to(joint.axis)
-            parent = _element(geometry, joint.parent, joint.origin_xyz, joint.origin_rotation @ align)
-            child = _element(geometry, joint.child, np.zeros(3), align)
-        outer, inner = (child, parent) if spec.outer_on == "child" else (parent, child)
-        contacts.append(ContactSiteNE(spec.joint, spec.law, outer, inner, first))
-        first += spec.law.n_candidates
-
+    contacts = _contact_sites(geometry, description, scene.clearances)
     mass = np.array([b.mass for b in bodies])
     inertia = np.array([b.inertia for b in bodies])
     ee_link = scene.end_effector
@@ -260,14 +269,15 @@ def build_model(run: Run) -> NewtonEulerModel:
         inertia=inertia,
         inertia_inv=np.linalg.inv(inertia),
         constraints=cs,
-        contacts=tuple(contacts),
+        contacts=contacts,
         drive=run.dynamics.drive,
         alpha=scene.baumgarte.alpha,
         beta=scene.baumgarte.beta,
         ee_body=geometry.body_index(ee_link),
         ee_offset=-com[ee_link],
-        n_candidates=first,
+        n_candidates=sum(site.law.n_candidates for site in contacts),
         names=tuple(b.name for b in bodies),
+        gravity=np.array(run.mechanism.model.gravity.linear),
     )
 
 
@@ -321,7 +331,7 @@ def evaluate(model: NewtonEulerModel, t: float, y: np.ndarray, onset: np.ndarray
     states = model.states(y)
     rows = model.constraints.evaluate(states, model.drive.drive(t))
     A, w = states.A[:n], states.w[:n]
-    force = model.mass[:, None] * GRAVITY
+    force = model.mass[:, None] * model.gravity
     Jw = np.einsum("kij,kj->ki", model.inertia, w)
     torque = -cross(w, Jw)
     contacts = []
@@ -355,18 +365,61 @@ def evaluate(model: NewtonEulerModel, t: float, y: np.ndarray, onset: np.ndarray
     return NEEvaluation(ydot, lam, rows.phi, contacts, driving, ee)
 
 
-def penetrations(model: NewtonEulerModel, y: np.ndarray, onset: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Penetration and its rate for every contact candidate."""
+def contact_kinematics(model: NewtonEulerModel, y: np.ndarray, onset: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Penetration, its rate and the normal force of every contact candidate."""
     states = model.states(y)
     pen = np.empty(model.n_candidates)
     rate = np.empty(model.n_candidates)
+    force = np.empty(model.n_candidates)
     for site in model.contacts:
         Ro, po, two, _ = _element_state(states, site.outer)
         Ri, pi_, twi, _ = _element_state(states, site.inner)
         result = site.law.evaluate(Ro, po, two, Ri, pi_, twi, onset[site.candidates])
         pen[site.candidates] = result.penetration
         rate[site.candidates] = result.penetration_rate
-    return pen, rate
+        force[site.candidates] = result.normal_force
+    return pen, rate, force
+
+
+def penetrations(model: NewtonEulerModel, y: np.ndarray, onset: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Penetration and its rate for every contact candidate."""
+    return contact_kinematics(model, y, onset)[:2]
+
+
+class NewtonEulerSystem:
+    """The Newton-Euler model behind the step loop's protocol (:class:`robot.integration.event_loop.EventSystem`).
+
+    Its own equations of motion (:func:`evaluate`) and contact kinematics; no
+    penetration bound, no residual check, no Jacobian (explicit methods only).
+    """
+
+    structure = None
+    jacobian = None
+
+    def __init__(self, model: NewtonEulerModel):
+        self.model = model
+        self.size = 13 * model.n
+        self.n_candidates = model.n_candidates
+        self.penetration_bounds = np.full(model.n_candidates, np.inf)
+        self.rhs_calls = 0
+        self._floor = np.full(model.n_candidates, ONSET_RATE_FLOOR)  # penetrations do not depend on the onset rates
+
+    def derivative(self, t: float, y: np.ndarray, onset: np.ndarray) -> np.ndarray:
+        self.rhs_calls += 1
+        return evaluate(self.model, t, y, onset).ydot
+
+    def probe(self, t: float, y: np.ndarray, onset: np.ndarray, residual: bool = True) -> ContactProbe:
+        penetration, rate, force = contact_kinematics(self.model, y, onset)
+        return ContactProbe(penetration, rate, math.nan, force)
+
+    def penetrations(self, t: float, y: np.ndarray) -> np.ndarray:
+        return contact_kinematics(self.model, y, self._floor)[0]
+
+    def normalise(self, y: np.ndarray) -> np.ndarray:
+        return self.model.normalise(y)
+
+    def replica(self) -> "NewtonEulerSystem":
+        return NewtonEulerSystem(self.model)
 
 
 # --- simulation -------------------------------------------------------------------------------
@@ -434,29 +487,11 @@ def simulate(
     """
     started = time.perf_counter()
     solver = run.scene.solver if solver is None else solver
+    overrides = {k: v for k, v in dict(method=method, rtol=rtol, atol=atol, max_step=max_step).items() if v is not None}
+    solver = dataclasses.replace(solver, **overrides)
     model = build_model(run)
     y0 = initial_state(model, run)
-
-    def rhs(t, y, onset):
-        return evaluate(model, t, y, onset).ydot
-
-    def probe(t, y, onset):
-        return penetrations(model, y, onset)
-
-    events = integrate_with_events(
-        rhs,
-        probe,
-        y0,
-        (0.0, run.scene.duration if t_end is None else t_end),
-        model.n_candidates,
-        normalise=model.normalise,
-        method=solver.method if method is None else method,
-        rtol=solver.rtol if rtol is None else rtol,
-        atol=solver.atol if atol is None else atol,
-        max_step=solver.max_step if max_step is None else max_step,
-        t_eval=t_eval,
-        first_step=solver.first_step,
-    )
+    events = run_events(NewtonEulerSystem(model), y0, (0.0, run.scene.duration if t_end is None else t_end), solver, t_eval)
     arrays = outputs(model, events.t, events.y, events.onset_rates)
     arrays["record_kind"] = events.kind
     eval_arrays = outputs(model, events.t_eval, events.y_eval, events.onset_eval) if len(events.t_eval) else {}

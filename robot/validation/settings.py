@@ -29,11 +29,11 @@ from __future__ import annotations
 import dataclasses
 from pathlib import Path
 
-from ..integrators import FIXED_STEP_METHODS, METHODS
-from ..run import Run, build_run
-from ..scene import Scene
-from ..simulation import SolverOptions
-from .event_loop import SOLVERS as EVENT_LOOP_METHODS
+from robot.integration.solvers import FIXED_STEP_METHODS, METHODS
+from robot.run import Run, build_run
+from robot.scene.loader import Scene
+from robot.integration.simulation import SolverOptions
+from robot.validation.event_loop import SOLVERS as EVENT_LOOP_METHODS
 
 #: the integrator of every validation run, Lagrange and Newton-Euler alike
 VALIDATION_SOLVER = SolverOptions(method="RK45", rtol=1e-7, atol=1e-9, max_step=1e-3)
@@ -86,7 +86,7 @@ def validation_run(scene: Scene | str | Path, *, solver: SolverOptions = VALIDAT
 
     ``overrides``: top-level scene keys such as ``duration``. The returned
     ``run.scene.solver`` is ``solver``; the scene file's own ``[solver]`` is not used
-    (:func:`robot.scene.load_scene` still reads and validates it).
+    (:func:`robot.scene.loader.load_scene` still reads and validates it).
     """
     return with_solver(build_run(scene, **overrides), solver)
 

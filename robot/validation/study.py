@@ -28,14 +28,14 @@ from pathlib import Path
 
 import numpy as np
 
-from ..integrators import METHODS
-from ..platform_kinematics import platform_state
-from ..run import build_run, run_scene
-from ..simulation import SolverOptions
-from . import comparison as CMP
-from . import exudyn_model as EX
-from . import newton_euler as NE
-from .settings import VALIDATION_SOLVER, check_solver, validation_solver, with_solver
+from robot.integration.solvers import METHODS
+from robot.model.platform_kinematics import platform_state
+from robot.run import build_run, run_scene
+from robot.integration.simulation import SolverOptions
+from robot.validation import comparison as CMP
+from robot.validation import exudyn_model as EX
+from robot.validation import newton_euler as NE
+from robot.validation.settings import VALIDATION_SOLVER, check_solver, validation_solver, with_solver
 
 DEFAULT_SCENES = ("ideal", "spherical", "compound", "compound_misaligned")
 DEFAULT_DURATIONS = {"ideal": 1.0, "spherical": 0.5, "compound": 0.5, "compound_misaligned": 0.5}
@@ -237,7 +237,7 @@ def main(argv=None) -> int:
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     results = {
-        "description": "Lagrange model (robot.dynamics) against Newton-Euler (robot.validation.newton_euler) and Exudyn (robot.validation.exudyn_model); see docs/validation.md",
+        "description": "Lagrange model (robot.dynamics.equations) against Newton-Euler (robot.validation.newton_euler) and Exudyn (robot.validation.exudyn_model); see docs/validation.md",
         "validation_solver": dataclasses.asdict(solver),
         "scenes": {},
     }
@@ -247,7 +247,7 @@ def main(argv=None) -> int:
         metrics, series = compare_scene(scene, duration, ("lagrange", *args.engines), solver=solver)
         results["scenes"][scene] = metrics
         if not args.no_figures:
-            from .figures import scene_figures
+            from robot.validation.figures import scene_figures
 
             metrics["figures"] = [p.name for p in scene_figures(scene, series, metrics, out)]
         (out / "validation.json").write_text(json.dumps(_clean(results), indent=2))

@@ -1,0 +1,1 @@
+"""Equations of motion: Lagrange multipliers, Baumgarte, contact forces, Jacobians."""

@@ -1,0 +1,757 @@
+"""Equations of motion: Lagrange multipliers, Baumgarte stabilisation, clearance contact.
+
+Seed paper eq. (24) (MODEL-NOTES 5)::
+
+    [ M(q)   Phi_q^T ] [ qdd    ]   [ Q(q, qd, t)                          ]
+    [ Phi_q  0       ] [ lambda ] = [ gamma - 2 alpha Phid - beta^2 Phi    ]
+
+``Q = -h(q, qd) + sum_c J_c^T w_c``: ``h`` gathers gravity and velocity terms
+(Pinocchio's ``nonLinearEffects``), ``w_c`` are the clearance contact wrenches
+(``clearance_contact``, about each element frame origin, world axes) mapped
+through the ``LOCAL_WORLD_ALIGNED`` frame Jacobians ``J_c`` of those frames.
+``Phi`` holds the closures and the five driving constraints
+``q_k - s_k(t) = 0`` (``robot.model.constraints``); ``Phid = Phi_q qd - [0; sd]``.
+
+Pinocchio's ``forwardDynamics(model, data, tau, J, drift)`` solves the same KKT
+system in C++ with its own signs: ``M qdd + h = tau + J^T lambda_pin`` and
+``J qdd = -drift``. Hence ``drift = -(gamma - 2 alpha Phid - beta^2 Phi)`` and
+``lambda = -lambda_pin`` in the paper's convention.
+
+**Redundant rows** (overconstrained mechanisms): the system is solved on the
+independent rows of ``Phi_q`` (:func:`solve_kkt`, :mod:`robot.model.redundancy`),
+exact for a consistent system; the reported multipliers are the minimum-norm
+ones, the driving forces unique.
+
+**Driving force sign.** The driving row of actuator k is the unit row of its
+prismatic coordinate (the leg length), so the actuator's generalized force is
+``-lambda_k = lambda_pin_k``: ``driving_force > 0`` means the actuator pushes
+(extends the leg), ``< 0`` pulls.
+
+Everything per-run lives in :class:`DynamicsWorkspace` (Pinocchio ``Data`` and
+caches); :class:`DynamicsModel` is immutable.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+import weakref
+from typing import Callable, NamedTuple, Protocol, Sequence
+
+import numpy as np
+import pinocchio as pin
+
+from clearance_contact import ContactError, SphericalClearanceJoint
+
+from robot.dynamics.baumgarte import Baumgarte
+from robot.model import constraints as C
+from robot.model import redundancy as R
+from robot.dynamics import rhs_kernels as K
+from robot.model.mechanism import ClearanceSite, Mechanism
+
+LWA = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
+
+
+class Drive(Protocol):
+    """Prescribed actuator coordinates: ``drive(t) -> (s, sd, sdd)``."""
+
+    def drive(self, t: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]: ...
+
+
+class ClearanceJointLaw(Protocol):
+    """What the dynamics needs from a ``clearance_contact`` joint (a :class:`clearance_contact.ClearanceJoint`).
+
+    ``KERNEL_ID``: the law's id in the compiled dispatcher (:func:`robot.dynamics.rhs_kernels.law_kernel`),
+    None for a law the simulator evaluates through ``evaluate``; ``SITE_KINDS``: the joints it can replace.
+    """
+
+    n_candidates: int
+    KERNEL_ID: int | None
+    SITE_KINDS: tuple[str, ...]
+
+    def evaluate(self, outer_rotation, outer_position, outer_twist, inner_rotation, inner_position, inner_twist, onset_rates): ...
+
+    def penetration(self, outer_rotation, outer_position, inner_rotation, inner_position) -> np.ndarray: ...
+
+
+@dataclass(frozen=True, eq=False)
+class ContactSite:
+    """A clearance site of the mechanism bound to its contact law."""
+
+    site: ClearanceSite
+    law: ClearanceJointLaw
+    first_candidate: int  # offset of its candidates in the global candidate list
+
+    @property
+    def candidates(self) -> slice:
+        return slice(self.first_candidate, self.first_candidate + self.law.n_candidates)
+
+
+@dataclass(frozen=True, eq=False)
+class DynamicsModel:
+    """Mechanism + constraints + contact laws + prescribed motion + stabilisation."""
+
+    mechanism: Mechanism
+    constraints: C.ConstraintSet
+    contacts: tuple[ContactSite, ...]
+    drive: Drive
+    baumgarte: Baumgarte = Baumgarte()
+    end_effector_frame: int = -1
+
+    @property
+    def n_candidates(self) -> int:
+        return sum(c.law.n_candidates for c in self.contacts)
+
+    @property
+    def nq(self) -> int:
+        return self.mechanism.model.nq
+
+    @property
+    def nv(self) -> int:
+        return self.mechanism.model.nv
+
+
+def make_dynamics_model(
+    mechanism: Mechanism,
+    laws: dict[str, ClearanceJointLaw],
+    drive: Drive,
+    baumgarte: Baumgarte = Baumgarte(),
+    end_effector_frame: str | None = None,
+) -> DynamicsModel:
+    """Bind every clearance site of ``mechanism`` to its law in ``laws`` (by site name)."""
+    missing = [s.name for s in mechanism.clearance_sites if s.name not in laws]
+    extra = [name for name in laws if name not in mechanism.clearance_names]
+    if missing or extra:
+        raise ValueError(f"contact laws must match the clearance sites {mechanism.clearance_names}: missing {missing}, unknown {extra}")
+    contacts, offset = [], 0
+    for site in mechanism.clearance_sites:
+        law = laws[site.name]
+        if site.kind not in law.SITE_KINDS:
+            raise ValueError(
+                f"clearance site {site.name!r} is a {site.kind} joint but its law {type(law).__name__} replaces "
+                f"{' or '.join(law.SITE_KINDS)} joints"
+            )
+        contacts.append(ContactSite(site, law, offset))
+        offset += law.n_candidates
+    ee = mechanism.frame_id(end_effector_frame or "platform")
+    return DynamicsModel(mechanism, C.constraint_set(mechanism, driven=True), tuple(contacts), drive, baumgarte, ee)
+
+
+@dataclass
+class DynamicsWorkspace:
+    """Per-run mutable state: Pinocchio data, counters and the hot path's prebound views."""
+
+    data: pin.Data
+    rhs_calls: int = 0
+    kernel: C.ConstraintKernel | None = None  # Phi, Phi_q, gamma on ``data`` (views bound once)
+    sites: tuple = ()  # per contact site: _SiteViews on ``data``
+    drive: Callable | None = None  # the drive through its interpolation table (see DriveTable)
+    zero_tau: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    compiled: "CompiledTerms | None" = None  # the compiled right-hand side's views, when it applies
+    rows: R.RowSelection | None = None  # the rows the KKT solve uses (robot.model.redundancy), set on first solve
+    rank_checks: int = 0  # redundancy detections after the first (a dropped row's check failed)
+
+
+def make_workspace(dynamics: DynamicsModel) -> DynamicsWorkspace:
+    model = dynamics.mechanism.model
+    data = model.createData()
+    kernel = C.ConstraintKernel(dynamics.constraints, data)
+    return DynamicsWorkspace(
+        data,
+        kernel=kernel,
+        sites=tuple(_SiteViews(contact, data) for contact in dynamics.contacts),
+        drive=drive_table(dynamics.drive),
+        zero_tau=np.zeros(model.nv),
+        compiled=CompiledTerms.for_dynamics(dynamics, data, kernel),
+    )
+
+
+class CompiledSite(NamedTuple):
+    """One clearance joint on the compiled path (views into :class:`CompiledTerms`' packed arrays)."""
+
+    law_kernel: Callable | None  # the law's compiled kernel, None for a law evaluated through its API
+    parameters: np.ndarray | None  # the kernel's parameters
+    masks: np.ndarray  # (2, nv) supports of the outer and inner element frames
+    outer_frame: int
+    inner_frame: int
+    candidates: slice  # its contact candidates in the global list
+    twists: np.ndarray  # (2, 6) LWA twists of the two frames (written by the kernels)
+    outputs: np.ndarray | None  # the law's output buffer
+    wrench_outer: int  # offsets of the wrenches in ``outputs`` (a Python law: in [outer, inner])
+    wrench_inner: int
+
+
+class CompiledTerms:
+    """Views and index arrays of the compiled right-hand side (:mod:`robot.dynamics.rhs_kernels`) on one ``pin.Data``.
+
+    Applies when every closure is spherical (rows ``p_a - p_b`` first, then the
+    drivers); otherwise :func:`for_dynamics` returns None and
+    :func:`state_derivative` takes the Python path. Redundant rows are handled
+    after the kernels: they write every row, :func:`solve_kkt` uses the independent ones. A contact law with a
+    compiled ``kernel`` (``clearance_contact``'s laws) is evaluated inside the
+    compiled code; any other law through its ``evaluate``.
+    """
+
+    def __init__(self, dynamics: DynamicsModel, data: pin.Data, kernel: C.ConstraintKernel):
+        model = dynamics.mechanism.model
+        closures = [rows.closure for rows in dynamics.constraints.closures]
+        self.placements = K.placement_buffer(data.oMf)
+        self.jacobian = data.J
+        self.jacobian_rate = data.dJ
+        self.frames_a = np.array([c.frame_a for c in closures], dtype=np.int64)
+        self.frames_b = np.array([c.frame_b for c in closures], dtype=np.int64)
+        self.closure_masks = K.support_mask(model, [f for c in closures for f in (c.frame_a, c.frame_b)])
+        self.phi_q = kernel.phi_q  # driving rows written once by the kernel
+        self.n_closure_rows = kernel.n_closure_rows
+        self.n_candidates = dynamics.n_candidates
+        self.drift = np.zeros(kernel.n_rows)
+        self.tau = np.zeros(model.nv)
+        self.actuator_q = np.asarray(dynamics.mechanism.actuator_q_index, dtype=np.int64)
+        self.actuator_v = np.asarray(dynamics.mechanism.actuator_v_index, dtype=np.int64)
+        if not kernel.driven:
+            self.actuator_q = self.actuator_v = np.zeros(0, dtype=np.int64)
+        # per contact site a CompiledSite; its masks, twists and output buffer are views of the
+        # packed arrays that all_sites reads
+        laws = [contact.law for contact in dynamics.contacts]
+        # compiled: a law whose type has a kernel id (known to rhs_kernels.law_kernel) and whose kernel
+        # does everything (``law.kernel`` is None e.g. for a user-defined friction law); others: ``evaluate``
+        compiled_law = [getattr(law, "KERNEL_ID", None) in K.LAW_IDS.values() and law.kernel is not None for law in laws]
+        sizes = [law.output_size if ok else 0 for law, ok in zip(laws, compiled_law)]
+        self.site_outputs_buffer = np.zeros(sum(sizes))
+        self.site_masks = np.zeros((len(laws), 2, model.nv), dtype=np.uint8)
+        self.site_twists = np.zeros((len(laws), 2, 6))
+        self.sites = []
+        offset = 0
+        for index, (contact, ok, size) in enumerate(zip(dynamics.contacts, compiled_law, sizes)):
+            law, site = contact.law, contact.site
+            self.site_masks[index] = K.support_mask(model, [site.outer_frame, site.inner_frame])
+            self.sites.append(
+                CompiledSite(
+                    law.kernel if ok else None,
+                    np.asarray(law.kernel_parameters, dtype=float) if ok else None,
+                    self.site_masks[index],
+                    site.outer_frame,
+                    site.inner_frame,
+                    contact.candidates,
+                    self.site_twists[index],
+                    self.site_outputs_buffer[offset : offset + size] if ok else None,
+                    law.WRENCH_OUTER if ok else 0,  # a Python law's wrenches are stacked [outer, inner]
+                    law.WRENCH_INNER if ok else 6,
+                )
+            )
+            offset += size
+        self.laws_compiled = all(compiled_law)
+        # every site in one compiled call (rhs_kernels.all_sites) when every law is a shipped compiled law
+        self.fused = None
+        if self.sites and self.laws_compiled and all(site.law_kernel in K.LAW_IDS for site in self.sites):
+            self.fused = K.all_sites
+            self.site_parameters = np.concatenate([site.parameters for site in self.sites])
+            table = np.zeros((len(self.sites), K.SITE_COLUMNS), dtype=np.int64)
+            first_parameter = first_output = 0
+            for row, (kernel, parameters, _, outer, inner, candidates, _, buffer, w_outer, w_inner) in zip(table, self.sites):
+                row[K.SITE_LAW] = K.LAW_IDS[kernel]
+                row[K.SITE_OUTER], row[K.SITE_INNER] = outer, inner
+                row[K.SITE_FIRST], row[K.SITE_LAST] = candidates.start, candidates.stop
+                row[K.SITE_PARAMETERS], row[K.SITE_PARAMETERS_END] = first_parameter, first_parameter + parameters.shape[0]
+                row[K.SITE_OUT], row[K.SITE_OUT_END] = first_output, first_output + buffer.shape[0]
+                row[K.SITE_WRENCH_OUTER], row[K.SITE_WRENCH_INNER] = w_outer, w_inner
+                first_parameter, first_output = first_parameter + parameters.shape[0], first_output + buffer.shape[0]
+            self.site_table = table
+        # per site: candidate slice and views of its law's penetration, rate and normal force outputs
+        self.site_outputs = []
+        for contact, site in zip(dynamics.contacts, self.sites):
+            law, buffer, k = contact.law, site.outputs, contact.law.n_candidates
+            if buffer is not None:
+                self.site_outputs.append(
+                    (
+                        contact.candidates,
+                        buffer[law.PENETRATION : law.PENETRATION + k],
+                        buffer[law.PENETRATION_RATE : law.PENETRATION_RATE + k],
+                        buffer[law.NORMAL_FORCE : law.NORMAL_FORCE + k],
+                    )
+                )
+
+    @classmethod
+    def for_dynamics(cls, dynamics: DynamicsModel, data: pin.Data, kernel: C.ConstraintKernel) -> "CompiledTerms | None":
+        constraints = dynamics.constraints
+        if any(rows.closure.kind != "spherical" or rows.rotation_offset_b is not None for rows in constraints.closures):
+            return None
+        if [rows.row for rows in constraints.closures] != list(range(0, 3 * len(constraints.closures), 3)):
+            return None
+        if constraints.n_closure_rows != 3 * len(constraints.closures):
+            return None  # centring rows
+        return cls(dynamics, data, kernel)
+
+
+class DriveTable:
+    """A drive's ``(s, sd, sdd)(t)`` through piecewise polynomials, verified against the drive.
+
+    The exact drive of a platform trajectory (inverse kinematics, ~200 us a call)
+    costs more than the rest of the right-hand side, so the integrator reads it
+    from a table: on each segment of width ``width`` (built on first use) every
+    output is interpolated at ``degree + 1`` Chebyshev nodes, and the polynomial
+    is checked against the exact drive at ``checks`` points between the nodes; a
+    segment whose check misses ``rtol`` (relative to the largest value of that
+    output over the segment, for s, sd and sdd separately) is evaluated exactly
+    instead. For the shipped smooth trajectories the table agrees with the drive
+    to ~1e-15 relative (``tests/test_integrators.py``), far below any
+    integration tolerance. ``exact_segments`` counts the fallbacks.
+    """
+
+    def __init__(self, drive: Drive, width: float = 1.0 / 16.0, degree: int = 13, rtol: float = 1e-12, checks: int = 2):
+        try:  # a weak reference: the shared tables (drive_table) must not keep their drive alive
+            self._drive = weakref.ref(drive)
+        except TypeError:
+            self._drive = lambda: drive
+        self.width = float(width)
+        self.degree = int(degree)
+        self.rtol = float(rtol)
+        n = self.degree + 1
+        self.nodes = np.cos(np.pi * (np.arange(n) + 0.5) / n)[::-1]
+        self.check_points = np.linspace(-1.0, 1.0, checks + 2)[1:-1] + 0.5 / (checks + 1)
+        self.segments: dict[int, tuple[float, np.ndarray | None, int]] = {}
+        self.exact_segments = 0
+        self._to_unit = 2.0 / self.width
+        self._low = self._high = math.nan  # the previous call's segment [low, high)
+        self._last = None
+
+    def _build(self, k: int):
+        half = 0.5 * self.width
+        middle = (k + 0.5) * self.width
+        drive = self.drive
+        samples = np.array([np.concatenate(drive.drive(middle + half * x)) for x in self.nodes])
+        m = samples.shape[1] // 3
+        coefficients = np.linalg.solve(np.vander(self.nodes, self.degree + 1, increasing=True), samples)
+        scale = np.abs(samples).reshape(len(self.nodes), 3, m).max(axis=(0, 2), initial=0.0)  # m = 0: no actuator
+        ok = True
+        for x in self.check_points:
+            exact = np.concatenate(drive.drive(middle + half * x))
+            fitted = np.empty(3 * m)
+            K.power_series(coefficients, x, fitted)
+            error = np.abs(fitted - exact).reshape(3, m).max(axis=1, initial=0.0)
+            if not np.all(error <= self.rtol * np.maximum(scale, 1e-300)):
+                ok = False
+                break
+        if not ok:
+            self.exact_segments += 1
+        segment = (middle, coefficients if ok else None, m)
+        self.segments[k] = segment
+        return segment
+
+    @property
+    def drive(self) -> Drive:
+        return self._drive()
+
+    def values(self, t: float) -> np.ndarray:
+        """``[s, sd, sdd]`` at t as one new array (3 m values)."""
+        if not self._low <= t < self._high:  # not the segment of the previous call
+            k = math.floor(t / self.width)
+            segment = self.segments.get(k)
+            if segment is None:
+                segment = self._build(k)
+            self._last = segment
+            self._low, self._high = k * self.width, (k + 1) * self.width
+        middle, coefficients, m = self._last
+        if coefficients is None:
+            return np.concatenate(self.drive.drive(t))
+        out = np.empty(3 * m)
+        K.power_series(coefficients, (t - middle) * self._to_unit, out)
+        return out
+
+    def __call__(self, t: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        values = self.values(t)
+        m = values.shape[0] // 3
+        return values[:m], values[m : 2 * m], values[2 * m :]
+
+
+_DRIVE_TABLES: "weakref.WeakKeyDictionary[object, DriveTable]" = weakref.WeakKeyDictionary()
+
+
+def drive_table(drive: Drive) -> DriveTable:
+    """The :class:`DriveTable` of ``drive``, shared by every workspace of the same drive object."""
+    try:
+        table = _DRIVE_TABLES.get(drive)
+    except TypeError:  # not weak-referenceable or not hashable: a private table
+        return DriveTable(drive)
+    if table is None:
+        table = DriveTable(drive)
+        _DRIVE_TABLES[drive] = table
+    return table
+
+
+def normalise_quaternions(mechanism: Mechanism, q: np.ndarray) -> np.ndarray:
+    """A copy of q with every free-flyer quaternion of unit norm (Pinocchio's ``normalize``)."""
+    return pin.normalize(mechanism.model, np.asarray(q, dtype=float))
+
+
+def configuration_rate(dynamics: DynamicsModel, workspace: DynamicsWorkspace, q: np.ndarray, v: np.ndarray) -> np.ndarray:
+    """dq/dt from the generalized velocity v (free-flyer: local twist to position and quaternion rates).
+
+    Free-flyer (Pinocchio): position rate ``R v_lin``; quaternion ``(x, y, z, w)``
+    rate ``0.5 q (x) (omega, 0)`` with ``omega`` in the body frame. Computed by
+    Pinocchio's tangent map (``tangentMapProduct``); ``q`` must have unit quaternions.
+    """
+    return np.reshape(pin.tangentMapProduct(dynamics.mechanism.model, q, np.reshape(v, (-1, 1))), -1)
+
+
+@dataclass
+class Evaluation:
+    """Everything computed at one (t, q, v): accelerations, multipliers, contacts."""
+
+    qdd: np.ndarray
+    multipliers: np.ndarray  # paper convention lambda (M qdd + Phi_q^T lambda = Q)
+    residual: np.ndarray
+    residual_rate: np.ndarray
+    contacts: list
+    generalized_contact_force: np.ndarray
+
+    def driving_force(self, constraints: C.ConstraintSet) -> np.ndarray:
+        return -self.multipliers[constraints.driving_rows]
+
+
+def element_states(data: pin.Data, model: pin.Model, site: ClearanceSite):
+    """Rotation, position and twist (world axes) of the outer and inner element frames."""
+    outer, inner = data.oMf[site.outer_frame], data.oMf[site.inner_frame]
+    outer_twist = pin.getFrameVelocity(model, data, site.outer_frame, LWA).vector
+    inner_twist = pin.getFrameVelocity(model, data, site.inner_frame, LWA).vector
+    return outer.rotation, outer.translation, outer_twist, inner.rotation, inner.translation, inner_twist
+
+
+def evaluate(
+    dynamics: DynamicsModel,
+    workspace: DynamicsWorkspace,
+    t: float,
+    q: np.ndarray,
+    v: np.ndarray,
+    onset_rates: np.ndarray,
+) -> Evaluation:
+    """Solve the stabilised KKT system (paper eq. (24)) at (t, q, v).
+
+    Evaluates every contact law (the full contact state is returned); the
+    integrator's right-hand side uses :func:`state_derivative` instead. The drive
+    is read from the same verified table as in the right-hand side
+    (:class:`DriveTable`, exact to 1e-12 relative; the exact inverse kinematics
+    cost ~200 us a call, more than the rest of this function).
+    """
+    model, data = dynamics.mechanism.model, workspace.data
+    kernel = workspace.kernel
+    workspace.rhs_calls += 1
+    s, sd, sdd = workspace.drive(t)
+    pin.computeAllTerms(model, data, q, v)
+    pin.updateFramePlacements(model, data)
+    phi, gam = kernel.update(q, s, sdd)
+    phi_q = kernel.phi_q
+    phi_dot = phi_q @ v
+    if kernel.driven:
+        phi_dot[kernel.n_closure_rows :] -= sd
+    gains = dynamics.baumgarte
+    rhs = gam - 2.0 * gains.alpha * phi_dot - gains.beta**2 * phi
+    tau = np.zeros(model.nv)
+    contacts = []
+    for contact, views in zip(dynamics.contacts, workspace.sites):
+        result = contact.law.evaluate(*views.states(model, data), onset_rates[contact.candidates])
+        contacts.append(result)
+        if np.any(result.in_contact):
+            views.add_generalized_force(model, data, result, tau)
+    qdd = solve_kkt(dynamics, workspace, tau, phi_q, -rhs).copy()
+    return Evaluation(qdd, -workspace.rows.full_multipliers(phi_q, data.lambda_c), phi, phi_dot, contacts, tau)
+
+
+def solve_kkt(dynamics: DynamicsModel, workspace: DynamicsWorkspace, tau: np.ndarray, phi_q: np.ndarray, drift: np.ndarray) -> np.ndarray:
+    """qdd of the KKT system (paper eq. (24), Pinocchio's signs) on the workspace's independent rows.
+
+    ``data.lambda_c`` then holds Pinocchio's multipliers of those rows (the driving ones
+    from ``workspace.rows.n_closure_kept``). The rows are detected on the first call and
+    again when a dropped row's equation is not met (:mod:`robot.model.redundancy`);
+    without redundant rows this is ``forwardDynamics`` on every row. Needs the joint
+    Jacobians and frame placements of the current state on the workspace's data.
+    Returns Pinocchio's ``data.ddq`` (overwritten by the next solve).
+    """
+    model, data = dynamics.mechanism.model, workspace.data
+    rows = workspace.rows
+    if rows is None:
+        rows = workspace.rows = R.detect(dynamics.constraints, model, data, phi_q)
+    if rows.full:
+        return pin.forwardDynamics(model, data, tau, phi_q, drift)
+    qdd = pin.forwardDynamics(model, data, tau, phi_q[rows.independent], drift[rows.independent])
+    if not rows.consistent(phi_q, drift, qdd):
+        workspace.rank_checks += 1
+        fresh = R.detect(dynamics.constraints, model, data, phi_q)
+        if not fresh.same_rows(rows):
+            workspace.rows = fresh
+            independent = fresh.independent
+            qdd = pin.forwardDynamics(model, data, tau, phi_q if fresh.full else phi_q[independent], drift if fresh.full else drift[independent])
+    return qdd
+
+
+def state_derivative(
+    dynamics: DynamicsModel,
+    workspace: DynamicsWorkspace,
+    t: float,
+    y: np.ndarray,
+    onset_rates: np.ndarray,
+) -> np.ndarray:
+    """dy/dt of the simulation state ``y = [q, v, W_act, W_contact]`` (the integrator's right-hand side).
+
+    The same equations as :func:`evaluate` (plus :func:`configuration_rate` and the
+    actuator and contact powers), on the hot path: quaternions normalised in a
+    copy of q, the drive through its interpolation table (:class:`DriveTable`).
+    Mechanisms whose closures are all spherical (every shipped scene) take the
+    compiled path (:class:`CompiledTerms`, :mod:`robot.dynamics.rhs_kernels`: Pinocchio's
+    CRBA, RNEA, joint Jacobians and their rates in C++, the closure rows, frame
+    twists, compiled contact laws and ``J^T w`` in numba); others the Python
+    path (the constraint kernel's prebound views, a contact law evaluated only
+    when its cheap ``penetration()`` shows contact). Raises ``ContactError`` as
+    :func:`evaluate` does.
+    """
+    mechanism = dynamics.mechanism
+    model, data = mechanism.model, workspace.data
+    kernel = workspace.kernel
+    nq, nv = model.nq, model.nv
+    workspace.rhs_calls += 1
+    q = pin.normalize(model, y[:nq])  # a copy with unit quaternions
+    v = y[nq : nq + nv]
+    compiled = workspace.compiled
+    if compiled is not None:
+        return _compiled_state_derivative(dynamics, workspace, compiled, t, q, v, onset_rates)
+    s, sd, sdd = workspace.drive(t)
+    pin.computeAllTerms(model, data, q, v)
+    pin.updateFramePlacements(model, data)
+    gains = dynamics.baumgarte
+    # Pinocchio's drift is minus the stabilised right-hand side
+    drift = kernel.stabilised_drift(q, v, s, sd, sdd, 2.0 * gains.alpha, gains.beta * gains.beta)
+    tau = None
+    for contact, views in zip(dynamics.contacts, workspace.sites):
+        # a site in contact at the previous call is evaluated directly; otherwise its cheap
+        # penetration() decides whether the law is needed at all
+        if views.touching or views.maybe_in_contact():
+            result = contact.law.evaluate(*views.states(model, data), onset_rates[contact.candidates])
+            views.touching = not max(result.penetration.tolist()) <= 0.0
+            if views.touching:
+                if tau is None:
+                    tau = np.zeros(nv)
+                views.add_generalized_force(model, data, result, tau)
+    out = np.empty(nq + nv + 2)
+    out[nq : nq + nv] = solve_kkt(dynamics, workspace, workspace.zero_tau if tau is None else tau, kernel.phi_q, drift)
+    out[:nq] = pin.tangentMapProduct(model, q, v[:, None])
+    # actuator power: driving force (= Pinocchio's multiplier of the driving row) times the actuator rate
+    out[nq + nv] = data.lambda_c[workspace.rows.n_closure_kept :] @ v[mechanism.actuator_v_index] if kernel.driven else 0.0
+    out[nq + nv + 1] = 0.0 if tau is None else tau @ v
+    return out
+
+
+def _compiled_state_derivative(
+    dynamics: DynamicsModel,
+    workspace: DynamicsWorkspace,
+    compiled: CompiledTerms,
+    t: float,
+    q: np.ndarray,
+    v: np.ndarray,
+    onset_rates: np.ndarray,
+) -> np.ndarray:
+    """:func:`state_derivative` through :mod:`robot.dynamics.rhs_kernels` (same equations)."""
+    model, data = dynamics.mechanism.model, workspace.data
+    nq, nv = model.nq, model.nv
+    drive = workspace.drive.values(t)
+    # C++: M (CRBA), h (RNEA at zero acceleration), world joint Jacobians and their rates, frames
+    pin.nonLinearEffects(model, data, q, v)
+    pin.crba(model, data, q)
+    pin.computeJointJacobiansTimeVariation(model, data, q, v)
+    pin.updateFramePlacements(model, data)
+    gains = dynamics.baumgarte
+    placements, jacobian = compiled.placements, compiled.jacobian
+    K.spherical_closure_drift(
+        placements,
+        jacobian,
+        compiled.jacobian_rate,
+        compiled.closure_masks,
+        compiled.frames_a,
+        compiled.frames_b,
+        q,
+        v,
+        drive,
+        compiled.actuator_q,
+        compiled.actuator_v,
+        2.0 * gains.alpha,
+        gains.beta * gains.beta,
+        compiled.phi_q,
+        compiled.drift,
+    )
+    tau = compiled.tau
+    tau[:] = 0.0
+    _compiled_sites(dynamics, workspace, compiled, t, v, onset_rates, tau)
+    out = np.empty(nq + nv + 2)
+    out[nq : nq + nv] = solve_kkt(dynamics, workspace, tau, compiled.phi_q, compiled.drift)
+    out[:nq] = pin.tangentMapProduct(model, q, v[:, None])
+    # actuator power: driving force (= Pinocchio's multiplier of the driving row) times the actuator rate
+    K.write_powers(data.lambda_c, workspace.rows.n_closure_kept, v, compiled.actuator_v, tau, out, nq + nv)
+    return out
+
+
+def _compiled_sites(
+    dynamics: DynamicsModel, workspace: DynamicsWorkspace, compiled: CompiledTerms, t: float, v: np.ndarray, onset_rates: np.ndarray, tau: np.ndarray
+) -> None:
+    """Evaluate every clearance joint at the kinematics in ``workspace.data``; ``tau += J^T w`` (compiled path).
+
+    Every law a shipped compiled law: one call of :func:`robot.dynamics.rhs_kernels.all_sites`
+    (each law's outputs in its buffer). Otherwise site by site, a law without a
+    compiled kernel through its ``evaluate``.
+    """
+    placements, jacobian = compiled.placements, compiled.jacobian
+    if compiled.fused is not None:
+        code = compiled.fused(
+            placements, jacobian, v, onset_rates, tau, compiled.site_table, compiled.site_masks, compiled.site_parameters, compiled.site_outputs_buffer, compiled.site_twists
+        )
+        if code != 0:
+            index = code // 16 - 1
+            site = compiled.sites[index]
+            _raise_contact_error(dynamics, workspace, index, site.twists, onset_rates[site.candidates], t, code % 16)
+        return
+    for index, (law_kernel, parameters, masks, outer, inner, candidates, twists, buffer, w_outer, w_inner) in enumerate(compiled.sites):
+        onset = onset_rates[candidates]
+        views = workspace.sites[index]
+        K.site_twists(placements, jacobian, masks, outer, inner, v, twists)
+        if law_kernel is None:
+            result = views.law.evaluate(views.outer_rotation, views.outer_position, twists[0], views.inner_rotation, views.inner_position, twists[1], onset)
+            buffer = np.concatenate([result.wrench_outer, result.wrench_inner])
+        else:
+            status = law_kernel(parameters, views.outer_rotation, views.outer_position, twists[0], views.inner_rotation, views.inner_position, twists[1], onset, buffer)
+            if status != 0:
+                _raise_contact_error(dynamics, workspace, index, twists, onset, t, status)
+        K.add_site_wrenches(placements, jacobian, masks, outer, inner, buffer, w_outer, w_inner, tau)
+
+
+def _raise_contact_error(dynamics: DynamicsModel, workspace: DynamicsWorkspace, index: int, twists, onset, t: float, status: int):
+    """A compiled law returned ``status != 0``: raise its ``evaluate``'s informative ``ContactError``."""
+    views = workspace.sites[index]
+    views.law.evaluate(views.outer_rotation, views.outer_position, twists[0], views.inner_rotation, views.inner_position, twists[1], onset)
+    raise ContactError(f"contact law of {dynamics.contacts[index].site.name!r} failed (status {status}) at t={t!r}")
+
+
+class Probe(NamedTuple):
+    """What :func:`contact_probe` measures at one state (per contact candidate, and the constraints)."""
+
+    penetration: np.ndarray
+    penetration_rate: np.ndarray
+    residual: float  # max |Phi|
+    normal_force: np.ndarray
+
+
+def contact_probe(
+    dynamics: DynamicsModel, workspace: DynamicsWorkspace, t: float, q: np.ndarray, v: np.ndarray, onset_rates: np.ndarray, residual: bool = True
+) -> Probe:
+    """Penetration, penetration rate and normal force of every candidate, and max |Phi|, at (t, q, v).
+
+    Kinematics only (no dynamics): what the simulation checks after every step
+    (events, failures, force maxima). ``q`` must have unit quaternions.
+    ``residual=False`` skips max |Phi| (reported as NaN; the compiled path only).
+    """
+    model, data = dynamics.mechanism.model, workspace.data
+    compiled = workspace.compiled
+    n = dynamics.n_candidates if compiled is None else compiled.n_candidates
+    pen, rate, force = np.empty(n), np.empty(n), np.empty(n)
+    if compiled is not None and compiled.laws_compiled:
+        pin.computeJointJacobians(model, data, q)
+        pin.updateFramePlacements(model, data)
+        worst = math.nan
+        if residual:
+            worst = K.largest_residual(compiled.placements, compiled.frames_a, compiled.frames_b, q, workspace.drive.values(t), compiled.actuator_q)
+        # compiled.tau receives the (unused) J^T w: every right-hand side starts by zeroing it
+        _compiled_sites(dynamics, workspace, compiled, t, v, onset_rates, compiled.tau)
+        for candidates, penetration, penetration_rate, normal_force in compiled.site_outputs:
+            pen[candidates] = penetration
+            rate[candidates] = penetration_rate
+            force[candidates] = normal_force
+        return Probe(pen, rate, worst, force)
+    pin.forwardKinematics(model, data, q, v)
+    pin.updateFramePlacements(model, data)
+    residual = workspace.kernel.residual(q, workspace.drive(t)[0])
+    for contact, views in zip(dynamics.contacts, workspace.sites):
+        result = contact.law.evaluate(*views.states(model, data), onset_rates[contact.candidates])
+        pen[contact.candidates] = result.penetration
+        rate[contact.candidates] = result.penetration_rate
+        force[contact.candidates] = result.normal_force
+    return Probe(pen, rate, (float(np.max(np.abs(residual))) if residual.size else 0.0), force)
+
+
+class _SiteViews:
+    """A contact site's element frames on one ``pin.Data``: rotation and translation views bound once."""
+
+    def __init__(self, contact: ContactSite, data: pin.Data):
+        site = contact.site
+        self.law = contact.law
+        self.outer_frame, self.inner_frame = site.outer_frame, site.inner_frame
+        outer, inner = data.oMf[site.outer_frame], data.oMf[site.inner_frame]
+        self.outer_rotation, self.outer_position = outer.rotation, outer.translation
+        self.inner_rotation, self.inner_position = inner.rotation, inner.translation
+        # the spherical law's penetration is |b - s| - c: inline it (exactly the law's formula)
+        law = contact.law
+        self.sphere_clearance = law.socket_radius - law.ball_radius if type(law) is SphericalClearanceJoint else None
+        self.touching = False  # in contact at the previous right-hand side (a hint, never a shortcut to a force)
+
+    def states(self, model: pin.Model, data: pin.Data):
+        """Arguments of ``law.evaluate`` but the onset rates (as :func:`element_states`)."""
+        return (
+            self.outer_rotation,
+            self.outer_position,
+            pin.getFrameVelocity(model, data, self.outer_frame, LWA).vector,
+            self.inner_rotation,
+            self.inner_position,
+            pin.getFrameVelocity(model, data, self.inner_frame, LWA).vector,
+        )
+
+    def maybe_in_contact(self) -> bool:
+        """False only if every candidate's penetration is <= 0 (a NaN pose answers True)."""
+        if self.sphere_clearance is not None:
+            depth = math.dist(self.inner_position.tolist(), self.outer_position.tolist()) - self.sphere_clearance
+            return not depth <= 0.0
+        depth = max(self.law.penetration(self.outer_rotation, self.outer_position, self.inner_rotation, self.inner_position).tolist())
+        return not depth <= 0.0
+
+    def add_generalized_force(self, model: pin.Model, data: pin.Data, result, tau: np.ndarray) -> None:
+        """tau += J_outer^T w_outer + J_inner^T w_inner (LOCAL_WORLD_ALIGNED frame Jacobians)."""
+        tau += pin.getFrameJacobian(model, data, self.outer_frame, LWA).T @ result.wrench_outer
+        tau += pin.getFrameJacobian(model, data, self.inner_frame, LWA).T @ result.wrench_inner
+
+
+def penetrations(dynamics: DynamicsModel, workspace: DynamicsWorkspace, q: np.ndarray) -> np.ndarray:
+    """Penetration of every contact candidate at q (positions only; cheap, for event functions)."""
+    if not dynamics.contacts:
+        return np.zeros(0)
+    model, data = dynamics.mechanism.model, workspace.data
+    pin.framesForwardKinematics(model, data, q)
+    out = np.empty(dynamics.n_candidates)
+    for contact, views in zip(dynamics.contacts, workspace.sites):
+        out[contact.candidates] = contact.law.penetration(views.outer_rotation, views.outer_position, views.inner_rotation, views.inner_position)
+    return out
+
+
+def inverse_dynamics_driving_forces(
+    dynamics: DynamicsModel, workspace: DynamicsWorkspace, q: np.ndarray, v: np.ndarray, qdd: np.ndarray
+) -> np.ndarray:
+    """Closed-loop inverse dynamics of the ideal mechanism: the multipliers that produce ``qdd``.
+
+    ``Phi_q^T lambda = -h - M qdd`` solved in the least-squares sense (exact for a
+    consistent motion); returns the driving forces ``-lambda_drive``. Independent
+    of the integrator: used to check the simulated driving forces.
+    """
+    model, data = dynamics.mechanism.model, workspace.data
+    tau = pin.rnea(model, data, q, v, qdd)  # M qdd + h
+    pin.computeJointJacobians(model, data, q)
+    pin.updateFramePlacements(model, data)
+    phi_q = C.jacobian(dynamics.constraints, model, data)
+    multipliers, *_ = np.linalg.lstsq(phi_q.T, -tau, rcond=None)
+    return -multipliers[dynamics.constraints.driving_rows]
+
+
+def energy(dynamics: DynamicsModel, workspace: DynamicsWorkspace, q: np.ndarray, v: np.ndarray) -> tuple[float, float]:
+    """Kinetic and potential (gravity) energy of the mechanism."""
+    model, data = dynamics.mechanism.model, workspace.data
+    return float(pin.computeKineticEnergy(model, data, q, v)), float(pin.computePotentialEnergy(model, data, q))
+
+
+def stack_candidates(contacts: Sequence, attribute: str) -> np.ndarray:
+    """Concatenate one per-candidate attribute over the contact sites."""
+    if not contacts:
+        return np.zeros(0)
+    return np.concatenate([np.atleast_1d(getattr(c, attribute)) for c in contacts])

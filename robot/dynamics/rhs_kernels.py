@@ -1,0 +1,311 @@
+"""Compiled kernels of the integrator's right-hand side (:func:`robot.dynamics.equations.state_derivative`).
+
+Pinocchio computes, in C++, the joint placements, the world joint Jacobian
+``J = data.J`` (6 x nv, spatial velocity ``(v_0, omega)`` of each body at the
+world origin, world axes) and its time derivative ``dJ = data.dJ``
+(``computeJointJacobiansTimeVariation``). Everything else the right-hand side
+needs per frame is a few lines of vector algebra on those, compiled with numba
+(``clearance_contact.compiled.jit``) so it costs no Python per frame:
+
+* velocity of a point ``p`` of body ``i``: ``v_p = J_lin v + omega x p``,
+  ``omega = J_ang v`` (columns of i's supporting joints only);
+* its Jacobian: column ``c`` is ``J_lin[:, c] + J_ang[:, c] x p``;
+* its classical acceleration at zero joint acceleration (the ``gamma`` of
+  paper eq. (24)): ``a_p = dJ_lin v + (dJ_ang v) x p + omega x v_p``;
+* a wrench ``(f, m)`` at ``p`` (world axes, moment about p) as a generalized
+  force: ``tau_c = J_lin[:, c] . f + J_ang[:, c] . (m + p x f)`` (its power is
+  ``f . v_p + m . omega``).
+
+The frame placements are read from ``data.oMf`` through one (n_frames, 12)
+array view (:func:`placement_buffer`: each ``SE3`` is 9 column-major rotation
+entries then 3 translation entries, contiguous in Pinocchio's aligned vector;
+the layout is verified when the view is made).
+
+The spherical closures' rows are paper eq. (21) (``Phi = p_a - p_b``), the
+driving rows eq. (22) (``Phi = q_k - s_k(t)``), stabilised as in eq. (24):
+the kernel returns Pinocchio's ``drift = 2 alpha Phid + beta^2 Phi - gamma``
+(``robot.dynamics.equations`` for the sign convention). ``tests/test_integrators.py``
+checks all of it against the reference functions of ``robot.model.constraints``
+(Pinocchio's frame Jacobians and classical accelerations).
+"""
+
+from __future__ import annotations
+
+import ctypes
+from pathlib import Path
+
+import numpy as np
+import pinocchio as pin
+
+from clearance_contact.compiled import JIT_ENABLED, drop_stale_caches, jit
+from clearance_contact.revolute import RevoluteClearanceJoint, revolute_kernel
+from clearance_contact.spherical import SphericalClearanceJoint, spherical_kernel
+
+if JIT_ENABLED:
+    # this package's compiled code calls clearance_contact's law kernels (see drop_stale_caches)
+    _ROBOT = Path(__file__).resolve().parent
+    drop_stale_caches([*_ROBOT.glob("*.py"), *(_ROBOT.parents[1] / "clearance_contact").glob("*.py")], _ROBOT / "__pycache__")
+
+SE3_FLOATS = 12  # 3x3 rotation (column-major) + translation
+
+
+def placement_buffer(placements: "pin.StdVec_SE3") -> np.ndarray:
+    """(n, 12) float view of a Pinocchio ``StdVec_SE3`` (e.g. ``data.oMf``): rotation (column-major), translation.
+
+    The view follows every kinematics update of the ``Data`` it was made from
+    (keep that ``Data`` alive). Raises ``RuntimeError`` if Pinocchio's memory
+    layout is not the expected contiguous one.
+    """
+    n = len(placements)
+    first = placements[0].rotation
+    base = first.__array_interface__["data"][0]
+    view = np.frombuffer((ctypes.c_double * (n * SE3_FLOATS)).from_address(base), dtype=float).reshape(n, SE3_FLOATS)
+    for k in range(n):
+        rotation, translation = placements[k].rotation, placements[k].translation
+        if (
+            rotation.__array_interface__["data"][0] != base + 8 * SE3_FLOATS * k
+            or translation.__array_interface__["data"][0] != base + 8 * (SE3_FLOATS * k + 9)
+            or not rotation.flags["F_CONTIGUOUS"]
+        ):
+            raise RuntimeError("unexpected memory layout of Pinocchio's SE3 vector: the compiled right-hand side cannot read it")
+    return view
+
+
+def support_mask(model: pin.Model, frame_ids) -> np.ndarray:
+    """(len(frame_ids), nv) uint8: 1 where a velocity coordinate moves the frame's body."""
+    mask = np.zeros((len(frame_ids), model.nv), dtype=np.uint8)
+    for row, frame_id in enumerate(frame_ids):
+        for joint in model.supports[model.frames[frame_id].parentJoint]:
+            if joint > 0:
+                mask[row, model.idx_vs[joint] : model.idx_vs[joint] + model.nvs[joint]] = 1
+    return mask
+
+
+@jit
+def _spatial_velocity(J, mask_row, v):
+    """(v_0, omega) = J v over the columns of ``mask_row`` (6 floats; J or its time derivative)."""
+    vx = vy = vz = wx = wy = wz = 0.0
+    for c in range(J.shape[1]):
+        if mask_row[c]:
+            vc = v[c]
+            vx += J[0, c] * vc
+            vy += J[1, c] * vc
+            vz += J[2, c] * vc
+            wx += J[3, c] * vc
+            wy += J[4, c] * vc
+            wz += J[5, c] * vc
+    return vx, vy, vz, wx, wy, wz
+
+
+@jit
+def point_velocity(placements, J, mask_row, frame, v, out):
+    """out[0:3] = v_p, out[3:6] = omega of frame ``frame``'s origin (world axes); the LWA twist."""
+    px, py, pz = placements[frame, 9], placements[frame, 10], placements[frame, 11]
+    vx, vy, vz, wx, wy, wz = _spatial_velocity(J, mask_row, v)
+    out[0] = vx + wy * pz - wz * py
+    out[1] = vy + wz * px - wx * pz
+    out[2] = vz + wx * py - wy * px
+    out[3] = wx
+    out[4] = wy
+    out[5] = wz
+
+
+@jit
+def add_point_jacobian(J, mask_row, px, py, pz, sign, phi_q, row):
+    for c in range(J.shape[1]):
+        if mask_row[c]:
+            wx, wy, wz = J[3, c], J[4, c], J[5, c]
+            phi_q[row, c] += sign * (J[0, c] + wy * pz - wz * py)
+            phi_q[row + 1, c] += sign * (J[1, c] + wz * px - wx * pz)
+            phi_q[row + 2, c] += sign * (J[2, c] + wx * py - wy * px)
+
+
+@jit
+def _point_bias_acceleration(placements, J, dJ, mask_row, frame, v):
+    """Classical acceleration of frame ``frame``'s origin at zero joint acceleration (world axes)."""
+    px, py, pz = placements[frame, 9], placements[frame, 10], placements[frame, 11]
+    vx, vy, vz, wx, wy, wz = _spatial_velocity(J, mask_row, v)
+    ax, ay, az, bx, by, bz = _spatial_velocity(dJ, mask_row, v)
+    # v_p = v_0 + omega x p;  a_p = a_0 + alpha x p + omega x v_p
+    upx = vx + wy * pz - wz * py
+    upy = vy + wz * px - wx * pz
+    upz = vz + wx * py - wy * px
+    return (
+        ax + by * pz - bz * py + wy * upz - wz * upy,
+        ay + bz * px - bx * pz + wz * upx - wx * upz,
+        az + bx * py - by * px + wx * upy - wy * upx,
+    )
+
+
+@jit
+def spherical_closure_drift(
+    placements, J, dJ, masks, frames_a, frames_b, q, v, drive, actuator_q, actuator_v, two_alpha, beta_squared, phi_q, drift
+):
+    """Rows of ``Phi_q`` and Pinocchio's ``drift`` for spherical closures then drivers (module docstring).
+
+    ``masks`` rows 2i, 2i+1 are the supports of ``frames_a[i]``, ``frames_b[i]``;
+    ``drive`` = [s, sd, sdd] (3 m values for m actuators). ``phi_q``'s driving
+    rows (constant unit rows) are not touched; its closure rows are overwritten.
+    """
+    nv = J.shape[1]
+    for i in range(frames_a.shape[0]):
+        fa, fb = frames_a[i], frames_b[i]
+        row = 3 * i
+        for k in range(3):
+            for c in range(nv):
+                phi_q[row + k, c] = 0.0
+        add_point_jacobian(J, masks[2 * i], placements[fa, 9], placements[fa, 10], placements[fa, 11], 1.0, phi_q, row)
+        add_point_jacobian(J, masks[2 * i + 1], placements[fb, 9], placements[fb, 10], placements[fb, 11], -1.0, phi_q, row)
+        aax, aay, aaz = _point_bias_acceleration(placements, J, dJ, masks[2 * i], fa, v)
+        abx, aby, abz = _point_bias_acceleration(placements, J, dJ, masks[2 * i + 1], fb, v)
+        for k in range(3):
+            rate = 0.0
+            for c in range(nv):
+                rate += phi_q[row + k, c] * v[c]
+            phi = placements[fa, 9 + k] - placements[fb, 9 + k]
+            # gamma = -(a_a - a_b) at zero joint acceleration
+            bias = (aax, aay, aaz)[k] - (abx, aby, abz)[k]
+            drift[row + k] = two_alpha * rate + beta_squared * phi + bias
+    m = actuator_q.shape[0]
+    first = 3 * frames_a.shape[0]
+    for k in range(m):
+        phi = q[actuator_q[k]] - drive[k]
+        rate = v[actuator_v[k]] - drive[m + k]
+        drift[first + k] = two_alpha * rate + beta_squared * phi - drive[2 * m + k]
+
+
+@jit
+def add_wrench(placements, J, mask_row, frame, wrench, tau):
+    """tau += J^T w for a wrench ``w = (f, m)`` at frame ``frame``'s origin (world axes, moment about it)."""
+    fx, fy, fz = wrench[0], wrench[1], wrench[2]
+    if fx == 0.0 and fy == 0.0 and fz == 0.0 and wrench[3] == 0.0 and wrench[4] == 0.0 and wrench[5] == 0.0:
+        return
+    px, py, pz = placements[frame, 9], placements[frame, 10], placements[frame, 11]
+    # the same wrench about the world origin: moment m + p x f
+    mx = wrench[3] + py * fz - pz * fy
+    my = wrench[4] + pz * fx - px * fz
+    mz = wrench[5] + px * fy - py * fx
+    for c in range(J.shape[1]):
+        if mask_row[c]:
+            tau[c] += J[0, c] * fx + J[1, c] * fy + J[2, c] * fz + J[3, c] * mx + J[4, c] * my + J[5, c] * mz
+
+
+@jit
+def site_twists(placements, J, masks, frame_outer, frame_inner, v, twists):
+    """twists[0], twists[1] = LWA twists of the outer and inner element frames (``masks`` rows 0, 1)."""
+    point_velocity(placements, J, masks[0], frame_outer, v, twists[0])
+    point_velocity(placements, J, masks[1], frame_inner, v, twists[1])
+
+
+@jit
+def add_site_wrenches(placements, J, masks, frame_outer, frame_inner, out, wrench_outer, wrench_inner, tau):
+    """tau += J^T w of a clearance joint's two wrenches, at offsets ``wrench_outer``/``wrench_inner`` of its law's ``out``."""
+    add_wrench(placements, J, masks[0], frame_outer, out[wrench_outer : wrench_outer + 6], tau)
+    add_wrench(placements, J, masks[1], frame_inner, out[wrench_inner : wrench_inner + 6], tau)
+
+
+@jit
+def write_powers(multipliers, first_driving_row, v, actuator_v, tau, out, offset):
+    """out[offset] = actuator power ``sum_k lambda_pin_k v_k`` (driving rows), out[offset + 1] = contact power ``tau . v``."""
+    power = 0.0
+    for k in range(actuator_v.shape[0]):
+        power += multipliers[first_driving_row + k] * v[actuator_v[k]]
+    out[offset] = power
+    power = 0.0
+    for c in range(v.shape[0]):
+        power += tau[c] * v[c]
+    out[offset + 1] = power
+
+
+@jit
+def largest_residual(placements, frames_a, frames_b, q, drive, actuator_q):
+    """max |Phi| over the spherical closures (``p_a - p_b``) and the drivers (``q_k - s_k``); NaN if any is NaN."""
+    worst = 0.0
+    for i in range(frames_a.shape[0]):
+        for k in range(9, 12):
+            size = abs(placements[frames_a[i], k] - placements[frames_b[i], k])
+            if size != size:
+                return size
+            worst = max(worst, size)
+    for k in range(actuator_q.shape[0]):
+        size = abs(q[actuator_q[k]] - drive[k])
+        if size != size:
+            return size
+        worst = max(worst, size)
+    return worst
+
+
+@jit
+def power_series(coefficients, x, out):
+    """out[j] = sum_k coefficients[k, j] x^k (Horner's rule)."""
+    n = coefficients.shape[0]
+    for j in range(coefficients.shape[1]):
+        value = coefficients[n - 1, j]
+        for k in range(n - 2, -1, -1):
+            value = value * x + coefficients[k, j]
+        out[j] = value
+
+
+#: the compiled joint types' kernels and the ids the compiled code knows them by (each type's
+#: ``KERNEL_ID``). numba caches a compiled function on disk only if no argument is itself a compiled
+#: function, and a kernel passed as an argument costs ~7 us of dispatch a call: so the law is chosen
+#: by an integer inside compiled code. A type without a branch in law_kernel (KERNEL_ID None, e.g.
+#: defined outside clearance_contact) is evaluated through its ``evaluate``.
+SPHERICAL_LAW, REVOLUTE_LAW = SphericalClearanceJoint.KERNEL_ID, RevoluteClearanceJoint.KERNEL_ID
+LAW_IDS = {SphericalClearanceJoint.kernel: SPHERICAL_LAW, RevoluteClearanceJoint.kernel: REVOLUTE_LAW}
+
+
+#: status of :func:`law_kernel` for a law id it does not know (nothing written)
+STATUS_UNKNOWN_LAW = 15
+
+
+@jit
+def law_kernel(law_id, parameters, outer_rotation, outer_position, outer_twist, inner_rotation, inner_position, inner_twist, onset, out):
+    """The kernel of law ``law_id`` (:data:`LAW_IDS`); returns its status (:data:`STATUS_UNKNOWN_LAW` for another id)."""
+    if law_id == SPHERICAL_LAW:
+        return spherical_kernel(parameters, outer_rotation, outer_position, outer_twist, inner_rotation, inner_position, inner_twist, onset, out)
+    if law_id == REVOLUTE_LAW:
+        return revolute_kernel(parameters, outer_rotation, outer_position, outer_twist, inner_rotation, inner_position, inner_twist, onset, out)
+    return STATUS_UNKNOWN_LAW
+
+
+#: columns of the site table of :func:`all_sites` (one row per clearance joint)
+(
+    SITE_LAW, SITE_OUTER, SITE_INNER, SITE_FIRST, SITE_LAST, SITE_PARAMETERS, SITE_PARAMETERS_END,
+    SITE_OUT, SITE_OUT_END, SITE_WRENCH_OUTER, SITE_WRENCH_INNER,
+) = range(11)  # fmt: skip
+SITE_COLUMNS = 11
+
+
+@jit
+def all_sites(placements, J, v, onset_rates, tau, table, masks, parameters, outputs, twists):
+    """Evaluate every clearance joint of a mechanism and add ``J^T w`` to ``tau`` (one compiled call).
+
+    ``table`` (n_sites x :data:`SITE_COLUMNS`, int64): per joint its law id,
+    element frames, candidate range, the ranges of its kernel parameters in
+    ``parameters`` and of its law output in ``outputs`` (flat float arrays of all
+    joints), and its wrenches' offsets in that output; ``masks`` (n_sites, 2, nv)
+    the frames' supports; ``twists`` (n_sites, 2, 6) receives their twists.
+    Returns 0, or ``16 * (index + 1) + status`` for the first joint whose law
+    returned a nonzero status (``tau`` then holds the joints before it).
+    """
+    for i in range(table.shape[0]):
+        outer, inner = table[i, SITE_OUTER], table[i, SITE_INNER]
+        out = outputs[table[i, SITE_OUT] : table[i, SITE_OUT_END]]
+        site_twists(placements, J, masks[i], outer, inner, v, twists[i])
+        status = law_kernel(
+            table[i, SITE_LAW],
+            parameters[table[i, SITE_PARAMETERS] : table[i, SITE_PARAMETERS_END]],
+            placements[outer, 0:9].reshape((3, 3)).T,
+            placements[outer, 9:12],
+            twists[i, 0],
+            placements[inner, 0:9].reshape((3, 3)).T,
+            placements[inner, 9:12],
+            twists[i, 1],
+            onset_rates[table[i, SITE_FIRST] : table[i, SITE_LAST]],
+            out,
+        )
+        if status != 0:
+            return 16 * (i + 1) + status
+        add_site_wrenches(placements, J, masks[i], outer, inner, out, table[i, SITE_WRENCH_OUTER], table[i, SITE_WRENCH_INNER], tau)
+    return 0

@@ -1,0 +1,1 @@
+"""Time integration: solvers, the event-driven step loop, records."""

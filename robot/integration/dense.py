@@ -1,0 +1,36 @@
+"""Cubic Hermite dense output: the state between two accepted step ends.
+
+For a step ``[t_old, t]`` of size ``h`` with end states ``y_old, y`` and
+derivatives ``f_old, f``, in ``s = (t' - t_old) / h``:
+
+    y(t') = (2s^3 - 3s^2 + 1) y_old + (s^3 - 2s^2 + s) h f_old + (-2s^3 + 3s^2) y + (s^3 - s^2) h f
+
+exact for cubic polynomials, error ``h^4 max|y''''| / 384`` (Hairer, Norsett and
+Wanner, *Solving ODEs I*, II.6). The dense output of the fixed-step methods
+(:mod:`robot.integration.solvers`) and, for methods whose step cannot be redone
+alone, of the force-peak search's earlier steps (:mod:`robot.integration.force_peaks`).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy.integrate._ivp.base import DenseOutput
+
+
+class HermiteDense(DenseOutput):
+    """Cubic Hermite interpolation between two states (values and derivatives), a ``scipy`` dense output."""
+
+    def __init__(self, t_old: float, t: float, y_old: np.ndarray, f_old: np.ndarray, y: np.ndarray, f: np.ndarray):
+        super().__init__(t_old, t)
+        self.h = t - t_old
+        self.y_old, self.y, self.f_old, self.f = y_old, y, f_old, f
+
+    def _call_impl(self, t):
+        s = (np.asarray(t) - self.t_old) / self.h
+        h00 = 2 * s**3 - 3 * s**2 + 1
+        h10 = s**3 - 2 * s**2 + s
+        h01 = -2 * s**3 + 3 * s**2
+        h11 = s**3 - s**2
+        if np.ndim(s) == 0:
+            return h00 * self.y_old + h10 * self.h * self.f_old + h01 * self.y + h11 * self.h * self.f
+        return np.outer(self.y_old, h00) + np.outer(self.f_old, h10 * self.h) + np.outer(self.y, h01) + np.outer(self.f, h11 * self.h)

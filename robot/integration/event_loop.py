@@ -1,0 +1,416 @@
+"""The event-driven step loop: one accepted solver step at a time, with contact events and failure checks.
+
+:class:`EventDrivenIntegrator` steps a ``scipy.integrate.OdeSolver`` (any method
+of the registry, :mod:`robot.integration.methods`) over a system that
+implements the narrow :class:`EventSystem` protocol: the Lagrange model
+(:class:`robot.integration.simulation.LagrangeSystem`) and the Newton-Euler
+cross-check (:class:`robot.validation.newton_euler.NewtonEulerSystem`) both run
+through it. Like ``OdeSolver.step()``, :meth:`EventDrivenIntegrator.step` is one
+small overridable unit; it is made of these steps, each its own method:
+
+1. :meth:`~EventDrivenIntegrator.advance`: the solver's step; a failed step,
+   a step-size collapse (variable-step methods) or a non-finite state stops the
+   run (``_Failure``); the system is probed at the step's end (penetrations,
+   their rates, normal forces, constraint residual);
+2. :meth:`~EventDrivenIntegrator.find_onsets`: the candidates whose penetration
+   crossed zero upward, located on the step's dense output (Brent's method), and
+   the impacts hidden inside the step (:mod:`robot.integration.events`);
+3. :meth:`~EventDrivenIntegrator.restart_at_onset`: the step is cut at the
+   earliest onset, the approach rate is stored as that candidate's onset rate
+   ``ddelta0`` (Lankarani-Nikravesh, MODEL-NOTES 4; floored by
+   ``clearance_contact.ONSET_RATE_FLOOR``) and the solver restarted there;
+4. :meth:`~EventDrivenIntegrator.check_failures`: penetration beyond its physical
+   bound, constraint drift, wall time;
+5. :meth:`~EventDrivenIntegrator.locate_peaks`: penetration maxima (rate crossing
+   zero downward in contact) and with each the candidate's force maximum
+   (:mod:`robot.integration.force_peaks`);
+6. :meth:`~EventDrivenIntegrator.accept`: output times, the step's record.
+
+What a run writes is described in :mod:`robot.integration.records`. A failure
+never raises: the run returns its :class:`~robot.integration.records.Trajectory`
+with ``status`` -1, the ``cause`` and the records so far.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from typing import Callable, NamedTuple, Protocol
+
+import numpy as np
+from scipy.optimize import brentq
+
+from clearance_contact import ONSET_RATE_FLOOR, ContactError
+
+from robot.integration import methods as registry
+from robot.integration.events import HIDDEN, ONSET, OVER_BOUND, PEAK, all_finite, first_contact_time, hidden_contact, step_flags
+from robot.integration.force_peaks import ForcePeaks, derivative_or_inf
+from robot.integration.options import FailureLimits, SolverOptions
+from robot.integration.records import FAILED, SUCCESS, OutputTimes, Records, Trajectory
+from robot.integration import records as R
+from robot.integration.solvers import SecondOrderStructure, make_solver
+
+#: restarts at one instant before the run is declared failed (contact events that make no progress)
+MAX_STALLED_RESTARTS = 20
+_NONE = np.zeros(0, dtype=np.intp)
+
+
+class ContactProbe(NamedTuple):
+    """Per contact candidate at one state: penetration (m), its rate (m/s), normal force (N); and max |Phi|."""
+
+    penetration: np.ndarray
+    penetration_rate: np.ndarray
+    residual: float  # constraint residual checked against FailureLimits.max_residual (NaN: not checked)
+    normal_force: np.ndarray
+
+
+class EventSystem(Protocol):
+    """What the step loop needs from a mechanism model.
+
+    The loop owns the onset rates (one per contact candidate, the contact state of
+    the Lankarani-Nikravesh law) and passes them in. ``derivative`` and ``probe``
+    raise ``clearance_contact.ContactError`` in a pose the contact laws refuse
+    (the loop answers a trial stage with ``inf``, an accepted state with the
+    failure "unphysical pose").
+    """
+
+    size: int  # state dimension
+    n_candidates: int
+    penetration_bounds: np.ndarray  # per candidate: a deeper penetration fails the run (inf: no bound)
+    structure: SecondOrderStructure | None  # for the methods that need it (second_order_structure)
+    #: ``jacobian(t, y, onset, out=None) -> df/dy`` for the methods that take one; None: the solver differences
+    jacobian: Callable[..., np.ndarray] | None
+
+    @property
+    def rhs_calls(self) -> int:
+        """Right-hand sides evaluated so far (counts ``derivative`` and any done for the Jacobian)."""
+
+    def derivative(self, t: float, y: np.ndarray, onset: np.ndarray) -> np.ndarray: ...
+
+    def probe(self, t: float, y: np.ndarray, onset: np.ndarray, residual: bool = True) -> ContactProbe: ...
+
+    def penetrations(self, t: float, y: np.ndarray) -> np.ndarray: ...
+
+    def normalise(self, y: np.ndarray) -> np.ndarray:
+        """The state with unit quaternions (applied to every restart and located event state)."""
+
+    def replica(self) -> "EventSystem":
+        """The same system on its own work data (the force-peak search replays steps with it)."""
+
+
+class _Failure(Exception):
+    def __init__(self, cause: str, message: str):
+        super().__init__(message)
+        self.cause = cause
+
+
+class _Step(NamedTuple):
+    """An accepted solver step: its interval, end state and the probe there."""
+
+    t_old: float
+    t_new: float
+    y_new: np.ndarray
+    probe: ContactProbe
+
+
+class EventDrivenIntegrator:
+    """One run of the step loop (module docstring): :meth:`run` returns a :class:`Trajectory`.
+
+    ``outputs``: times also recorded from the dense output (``RECORD_OUTPUT``);
+    ``locate_force_peaks``: search each impact's force maximum
+    (``RECORD_FORCE_PEAK``); ``progress(t)`` after every accepted step.
+    """
+
+    def __init__(
+        self,
+        system: EventSystem,
+        y0: np.ndarray,
+        t_span: tuple[float, float],
+        options: SolverOptions,
+        limits: FailureLimits = FailureLimits(),
+        *,
+        outputs: OutputTimes | None = None,
+        locate_force_peaks: bool = True,
+        progress: Callable[[float], None] | None = None,
+    ):
+        self.system, self.options, self.limits = system, options, limits
+        self.traits = registry.traits(options.method)
+        self.t0, self.t_final = map(float, t_span)
+        self.t, self.y = self.t0, system.normalise(np.asarray(y0, dtype=float))
+        self.onset = np.full(system.n_candidates, ONSET_RATE_FLOOR)
+        self.fun = derivative_or_inf(system, self.onset)  # reads the onset rates in place
+        self.records, self.events = Records(), []
+        self.outputs, self.progress = outputs, progress
+        self.force_peaks = ForcePeaks(system, options, self.records) if locate_force_peaks else None
+        self.counts = dict(steps=0, rejected=0, rhs=0, restarts=0, hidden=0, jacobians=0)
+        self.max_onset_overshoot = 0.0
+        self.first_step = options.first_step
+        self.stalled = 0
+        self.solver = None
+        self.pen = self.rate = None  # penetrations and rates at (self.t, self.y)
+
+    # --- the run -------------------------------------------------------------------------------
+    def run(self) -> Trajectory:
+        """Integrate over ``t_span``; never raises on divergence (see the trajectory's ``status``)."""
+        started_cpu, started_wall = time.process_time(), time.perf_counter()
+        self.started_wall = started_wall
+        self.start()
+        status, cause, message = SUCCESS, None, "the integration reached the end of the time span"
+        try:
+            while self.t < self.t_final:
+                self.start_solver()
+                restarted = False
+                while self.solver.status == "running" and not restarted:
+                    restarted = self.step()
+                if restarted:
+                    self.counts["restarts"] += 1
+                    self.first_step = self.options.first_step if self.traits.fixed_step else self._step_size()
+                    self.y = self.system.normalise(self.y)
+                self.end_solver()
+                if not restarted:
+                    break
+        except _Failure as failure:
+            status, cause, message = FAILED, failure.cause, str(failure)
+        except (np.linalg.LinAlgError, RuntimeError, ValueError) as exc:
+            status, cause, message = FAILED, "solver error", f"t={self.t:.9g} s: {type(exc).__name__}: {exc}"
+        except KeyboardInterrupt:
+            status, cause, message = FAILED, "interrupted", f"t={self.t:.9g} s: interrupted by the user"
+        if status == FAILED:
+            self.end_solver(count_rejected=False)
+        return self.trajectory(status, cause, message, time.process_time() - started_cpu, time.perf_counter() - started_wall)
+
+    def start(self) -> None:
+        """Probe and record the initial state; candidates already in contact start with their current rate."""
+        try:
+            start = self.probe(self.t, self.y)
+        except _Failure as failure:
+            raise ValueError(f"the initial state is not a valid pose ({failure})") from None
+        self.record(self.t, self.y, R.RECORD_START, forces=start.normal_force)
+        self.pen, self.rate = start.penetration, start.penetration_rate
+        if self.outputs is not None:
+            for t_out in self.outputs.take(self.t, self.t):
+                self.record(t_out, self.y, R.RECORD_OUTPUT)
+        for k in np.flatnonzero(self.pen > 0):
+            self.onset[k] = max(self.rate[k], ONSET_RATE_FLOOR)
+
+    def start_solver(self) -> None:
+        """A new solver from the current state (at the start and after every onset)."""
+        system, options = self.system, self.options
+        self.solver = None
+        self.calls_at_start = system.rhs_calls
+        self.dense_calls = 0
+        self.accepted_here = 0
+        jacobian = None
+        if self.traits.takes_jacobian and system.jacobian is not None:
+            onset = self.onset
+            jacobian = lambda t, y, out=None: system.jacobian(t, y, onset, out)  # noqa: E731
+        self.solver = make_solver(
+            options.method, self.fun, self.t, self.y, self.t_final, options.rtol, options.atol, options.max_step, self.first_step, system.structure, jacobian
+        )
+        self.calls_after_init = system.rhs_calls
+
+    def end_solver(self, count_rejected: bool = True) -> None:
+        """Add the solver's right-hand sides, Jacobians and rejected steps to the run's counts."""
+        counts, solver = self.counts, self.solver
+        calls = self.system.rhs_calls
+        counts["rhs"] += calls - self.calls_at_start
+        self.calls_at_start = calls
+        counts["jacobians"] += int(getattr(solver, "njev", 0) or 0)
+        self.solver = None  # counted
+        if not count_rejected or solver is None:
+            return
+        stages = self.traits.stages
+        if stages is not None:
+            # an explicit Runge-Kutta attempt costs `stages` calls (FSAL); the dense outputs' extra stages are not attempts
+            attempts = (calls - self.calls_after_init - self.dense_calls) / stages
+            counts["rejected"] += max(0, int(round(attempts)) - self.accepted_here)
+        elif getattr(solver, "n_rejected", None) is not None and counts["rejected"] >= 0:
+            counts["rejected"] += solver.n_rejected
+        else:
+            counts["rejected"] = -1
+
+    def _step_size(self) -> float | None:
+        h = self.solver.step_size if self.solver.step_size else None
+        return None if h is None or h <= 0 else h
+
+    # --- one step --------------------------------------------------------------------------------
+    def step(self) -> bool:
+        """One accepted solver step and what happened in it; True if the run restarts at a contact onset."""
+        step = self.advance()
+        self.dense = None
+        probe = step.probe
+        flags = step_flags(self.pen, self.rate, probe.penetration, probe.penetration_rate, self.system.penetration_bounds)
+        if flags & (ONSET | HIDDEN):
+            found = self.find_onsets(step, flags)
+            if found:
+                self.restart_at_onset(step, found)
+                return True
+        self.check_failures(step, flags)
+        if flags & PEAK:
+            self.locate_peaks(self.dense_output(), step.t_old, step.t_new, probe.penetration_rate)
+        self.accept(step)
+        return False
+
+    def advance(self) -> _Step:
+        """The solver's next accepted step, checked and probed at its end."""
+        solver = self.solver
+        message = solver.step()
+        if solver.status == "failed":
+            raise _Failure(getattr(solver, "failure_cause", None) or "step size collapse", f"t={solver.t:.9g} s: {message}")
+        t_new, y_new = solver.t, solver.y
+        self.accepted_here += 1
+        self.counts["steps"] += 1
+        if not self.traits.fixed_step and solver.step_size is not None and solver.step_size < self.limits.min_step and t_new < self.t_final:
+            raise _Failure("step size collapse", f"t={t_new:.9g} s: step size {solver.step_size:.3e} s below {self.limits.min_step:.1e} s")
+        if not all_finite(y_new):
+            raise _Failure("non-finite state", f"t={t_new:.9g} s: the state is not finite")
+        return _Step(solver.t_old, t_new, y_new, self.probe(t_new, y_new))
+
+    def find_onsets(self, step: _Step, flags: int) -> list[tuple[float, int]]:
+        """(time, candidate) of every contact onset inside the step: zero crossings and hidden impacts."""
+        pen_old, rate_old = self.pen, self.rate
+        pen_new, rate_new = step.probe.penetration, step.probe.penetration_rate
+        crossing = np.flatnonzero((pen_old <= 0) & (pen_new > 0)) if flags & ONSET else _NONE
+        if self.options.hidden_contacts and flags & HIDDEN:
+            hidden = np.flatnonzero((pen_old <= 0) & (pen_new <= 0) & (rate_old > 0) & (rate_new < 0))
+        else:
+            hidden = _NONE
+        found = []
+        if not (crossing.size or hidden.size):
+            return found
+        dense = self.dense_output()
+        for k in crossing:
+            found.append((first_contact_time(self._penetration_on(dense, k), step.t_old, step.t_new), k))
+        for k in hidden:
+            t_k = hidden_contact(self._penetration_on(dense, k), step.t_old, step.t_new)
+            if t_k is not None:
+                found.append((t_k, k))
+                self.counts["hidden"] += 1
+        if crossing.size:
+            self.max_onset_overshoot = max(self.max_onset_overshoot, float(np.max(pen_new[crossing])))
+        return found
+
+    def restart_at_onset(self, step: _Step, found: list[tuple[float, int]]) -> None:
+        """Cut the step at the earliest onset: records up to it, the onset rates, the restart state."""
+        t_event = min(found)[0]
+        dense = self.dense
+        y_event = self.system.normalise(dense(t_event))
+        at_event = self.probe(t_event, y_event)
+        pen_e, rate_e = at_event.penetration, at_event.penetration_rate
+        self.locate_peaks(dense, step.t_old, t_event, rate_e)
+        # every candidate touching at the event starts its impact now (simultaneous
+        # onsets are common: a tilting bearing meets both flanges at once)
+        starting = sorted({k for t_k, k in found if t_k <= t_event} | set(np.flatnonzero((self.pen <= 0) & (pen_e >= 0))))
+        for k in starting:
+            self.onset[k] = max(rate_e[k], ONSET_RATE_FLOOR)
+            self.events.append((t_event, int(k), "onset", float(self.onset[k])))
+        self.record_outputs(dense, step.t_old, t_event)
+        self.record(t_event, y_event, R.RECORD_ONSET, forces=at_event.normal_force)
+        if t_event <= self.t:
+            self.stalled += 1
+            if self.stalled > MAX_STALLED_RESTARTS:
+                raise _Failure("event chattering", f"t={t_event:.9g} s: {self.stalled} contact events without progress in time")
+        else:
+            self.stalled = 0
+        self.t, self.y = t_event, y_event
+        # the restart begins on the contact surface: count the starting candidates as
+        # touching so the same onsets are not detected a second time
+        pen_e[starting] = np.maximum(pen_e[starting], np.finfo(float).tiny)
+        self.pen, self.rate = pen_e, rate_e
+
+    def check_failures(self, step: _Step, flags: int) -> None:
+        """Penetration beyond its physical bound, constraint drift, wall time."""
+        limits, t_new = self.limits, step.t_new
+        if flags & OVER_BOUND:
+            bounds = self.system.penetration_bounds
+            pen_new = step.probe.penetration
+            k = np.flatnonzero(pen_new > bounds)[0]
+            raise _Failure(
+                "penetration beyond physical bound",
+                f"t={t_new:.9g} s: penetration {pen_new[k]:.3e} m of contact candidate {k} exceeds "
+                f"{bounds[k]:.3e} m ({limits.penetration_ratio} x clearance)",
+            )
+        if step.probe.residual > limits.max_residual:
+            raise _Failure("constraint drift", f"t={t_new:.9g} s: constraint residual {step.probe.residual:.3e} exceeds {limits.max_residual:.1e}")
+        if time.perf_counter() - self.started_wall > limits.max_wall_time:
+            raise _Failure("wall time", f"t={t_new:.9g} s: wall time limit {limits.max_wall_time} s reached")
+
+    def locate_peaks(self, dense, t_old: float, t_to: float, rate_to: np.ndarray) -> None:
+        """Record the penetration maxima inside (t_old, t_to), and with each its candidate's force maximum."""
+        for k in np.flatnonzero((self.rate > 0) & (rate_to <= 0)):
+            rate = lambda tt: float(self.probe(tt, dense(tt), residual=False).penetration_rate[k])  # noqa: E731
+            try:
+                t_peak = brentq(rate, t_old, t_to, xtol=1e-15, maxiter=200)
+            except ValueError:
+                continue
+            y_peak = self.system.normalise(dense(t_peak))
+            pen_peak = self.probe(t_peak, y_peak, residual=False).penetration[k]
+            if not (pen_peak > 0 and t_old < t_peak < t_to):
+                continue
+            self.events.append((t_peak, int(k), "peak", float(pen_peak)))
+            self.record(t_peak, y_peak, R.RECORD_PEAK)
+            found = None if self.force_peaks is None else self.force_peaks.locate(int(k), dense, t_old, t_peak, t_to, self.onset)
+            if found is not None:
+                t_force, y_force, force, onset_rates = found
+                self.events.append((t_force, int(k), "force_peak", force))
+                self.record(t_force, y_force, R.RECORD_FORCE_PEAK, onset_rates)
+
+    def accept(self, step: _Step) -> None:
+        """Output times inside the step, the step's record; the step's end becomes the current state."""
+        if self.outputs is not None and self.outputs.due(step.t_new):
+            self.record_outputs(self.dense_output(), step.t_old, step.t_new)
+        self.record(step.t_new, step.y_new, R.RECORD_STEP, forces=step.probe.normal_force)
+        self.t, self.y = step.t_new, step.y_new
+        self.pen, self.rate = step.probe.penetration, step.probe.penetration_rate
+        if self.progress is not None:
+            self.progress(self.t)
+
+    # --- helpers ---------------------------------------------------------------------------------
+    def dense_output(self):
+        """The current step's dense output (made once per step; its extra stages are not counted as attempts)."""
+        if self.dense is None:
+            before = self.system.rhs_calls
+            self.dense = self.solver.dense_output()
+            self.dense_calls += self.system.rhs_calls - before
+        return self.dense
+
+    def probe(self, t: float, y: np.ndarray, onset: np.ndarray | None = None, residual: bool = True) -> ContactProbe:
+        """The system's probe at an accepted (or located) state: a refused pose means the run has blown up."""
+        try:
+            return self.system.probe(t, y, self.onset if onset is None else onset, residual)
+        except ContactError as exc:
+            # an accepted state (a fixed-step method accepts every step) in an absurd pose,
+            # e.g. a journal turned half round in its bearing
+            raise _Failure("unphysical pose", f"t={t:.9g} s: {exc}") from None
+
+    def _penetration_on(self, dense, k: int) -> Callable[[float], float]:
+        """Candidate ``k``'s penetration along the dense output (positions only: the onset root-finding)."""
+        system = self.system
+
+        def penetration(t: float) -> float:
+            try:
+                return float(system.penetrations(t, dense(t))[k])
+            except ContactError as exc:
+                raise _Failure("unphysical pose", f"t={t:.9g} s: {exc}") from None
+
+        return penetration
+
+    def record(self, t: float, y: np.ndarray, kind: int, onset_rates: np.ndarray | None = None, forces: np.ndarray | None = None) -> None:
+        self.records.add(t, y, kind, self.onset if onset_rates is None else onset_rates, forces)
+
+    def record_outputs(self, dense, t_from: float, t_to: float) -> None:
+        """Record the output times in [t_from, t_to] not yet recorded, from the step's dense output."""
+        if self.outputs is None:
+            return
+        for t_out in self.outputs.take(t_from, t_to):
+            self.record(t_out, self.system.normalise(dense(t_out)), R.RECORD_OUTPUT)
+
+    def trajectory(self, status: int, cause: str | None, message: str, cpu_time: float, wall_time: float) -> Trajectory:
+        t, y, onset_rates, kind = self.records.arrays(self.system.n_candidates)
+        counts = self.counts
+        return Trajectory(
+            status=status, message=message, cause=cause, t_end=float(t[-1]), t=t, y=y, onset_rates=onset_rates, kind=kind,
+            n_steps=counts["steps"], n_rejected=counts["rejected"], n_rhs=counts["rhs"], n_events=len(self.events),
+            n_restarts=counts["restarts"], n_jacobians=counts["jacobians"], cpu_time=cpu_time, wall_time=wall_time,
+            events=self.events, n_hidden_contacts=counts["hidden"], max_onset_overshoot=self.max_onset_overshoot,
+        )

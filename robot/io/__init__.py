@@ -1,0 +1,1 @@
+"""Results: the Result type, file format and atomic writes."""

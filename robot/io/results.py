@@ -1,0 +1,340 @@
+"""Simulation results: derived outputs, the result object and the ``.npz`` result file.
+
+:func:`compute_outputs` evaluates the equations of motion once more at every
+recorded state (integration steps, contact onsets and penetration maxima) and
+returns the arrays users look at. :class:`Result` holds them with the run's
+status, message and counts (like ``scipy.integrate.solve_ivp``'s ``OdeResult``),
+in memory and loaded from a file alike.
+:func:`save_result` writes one ``.npz`` atomically; :func:`load_result` reads it
+back and checks it.
+
+Arrays (n records): ``t``; ``q`` (n x nq), ``v`` (n x nv); ``driving_force``
+(n x n_actuators, N, positive = the actuator pushes); ``ee_position``,
+``ee_velocity``, ``ee_acceleration`` (n x 3, world, of the end-effector frame
+origin); ``constraint_residual`` (n, max |Phi|); ``kinetic_energy``,
+``potential_energy``, ``actuator_power``, ``contact_power``, ``actuator_work``,
+``contact_work`` (n; works integrated with the motion); ``record_kind`` (n, what
+each record is, below); ``onset_rates`` (n x candidates, the Lankarani-Nikravesh
+approach rate in use at each record); per clearance joint
+J: ``J_eccentricity`` (n x 3 spherical; n x 2 x 3 revolute, top and bottom ring),
+``J_penetration``, ``J_normal_force``, ``J_friction_force`` (magnitude),
+``J_kind`` (n x candidates). With contact events also ``event_t``,
+``event_candidate``, ``event_is_onset``, ``event_kind`` (the record kind each
+event wrote: 1 onset, 2 penetration maximum, 5 force maximum) and ``event_value``
+(the event log: onsets with their approach rate, penetration maxima with their
+depth, force maxima with the force in N).
+
+Record kinds (``record_kind``; constants ``robot.integration.simulation.RECORD_*``; records
+are sorted by time, so kinds 1, 2, 4 and 5 fall between step ends and the spacing
+is not uniform):
+
+* 0 ``RECORD_STEP``: the end of an accepted integration step (spacing at most
+  ``max_step``);
+* 1 ``RECORD_ONSET``: a contact onset located on the step's dense output; the
+  step was cut there and the solver restarted from this state;
+* 2 ``RECORD_PEAK``: a penetration maximum inside a step (penetration rate
+  crossing zero while in contact);
+* 3 ``RECORD_START``: the initial state (one record, the first);
+* 4 ``RECORD_OUTPUT``: a point of the regular output grid ``k * output_step``
+  (``SolverOptions.output_step``, set by the studies, never by a scene file),
+  from the dense output of the step containing it; select them with
+  ``result["record_kind"] == 4`` to compare runs at common times;
+* 5 ``RECORD_FORCE_PEAK``: a candidate's normal-force maximum over the
+  compression phase ending at a penetration maximum (``dF/dt = 0``, located on
+  the dense output; with damping it precedes the penetration maximum), so the
+  maximum of ``J_normal_force`` over the records is the located peak force, not
+  a sampled value.
+
+Status: ``status`` 0 and ``cause`` ``None`` for a run that reached the end;
+``status`` -1 for a run stopped on divergence, with ``message`` (starting with
+the time) and ``cause``, one of ``non-finite state``, ``penetration beyond
+physical bound``, ``constraint drift``, ``step size collapse``, ``event
+chattering``, ``wall time``, ``unphysical pose``, ``Newton divergence``,
+``solver error``, ``interrupted``: what triggers each and what to do is in
+``docs/dynamics.md`` ("Failure causes"). The arrays then hold every record up to
+the stop.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pinocchio as pin
+
+from robot.dynamics import equations as D
+from robot.io.atomic import atomic_write
+from robot.errors import ResultFileError
+from robot.integration.simulation import RECORD_FORCE_PEAK, RECORD_ONSET, RECORD_PEAK, Trajectory
+
+FORMAT_VERSION = 1
+#: event log kind -> the record kind it wrote (``event_kind``)
+_EVENT_KINDS = {"onset": RECORD_ONSET, "peak": RECORD_PEAK, "force_peak": RECORD_FORCE_PEAK}
+LWA = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
+
+
+class JointSeries:
+    """The arrays of one clearance joint of a :class:`Result` (``result.joint("R1")``).
+
+    Attributes are the result's arrays ``NAME_*`` without the prefix:
+    ``penetration``, ``normal_force``, ``friction_force``, ``kind`` (n x candidates),
+    ``eccentricity`` and whatever else the joint type writes; ``keys()`` lists them.
+    """
+
+    def __init__(self, name: str, arrays: dict[str, np.ndarray]):
+        self.name = name
+        self._arrays = arrays
+
+    def keys(self) -> list[str]:
+        return sorted(self._arrays)
+
+    def __getattr__(self, key: str) -> np.ndarray:
+        arrays = self.__dict__.get("_arrays", {})
+        if key in arrays:
+            return arrays[key]
+        raise AttributeError(f"clearance joint {self.__dict__.get('name')!r} has no array {key!r}; it has {sorted(arrays)}")
+
+    def __getitem__(self, key: str) -> np.ndarray:
+        return getattr(self, key)
+
+    def __repr__(self) -> str:
+        return f"JointSeries({self.name!r}, keys={self.keys()})"
+
+
+#: counter names of :attr:`Result.counts` and their scipy ``OdeResult`` names
+COUNT_ALIASES = {"nfev": "n_rhs", "njev": "n_jacobians", "nsteps": "n_steps", "nrejected": "n_rejected", "nevents": "n_events"}
+
+
+@dataclass
+class Result:
+    """One run, finished or stopped, in memory or loaded from a file (one type for both).
+
+    Follows :class:`scipy.integrate.OdeResult`: ``t``, the state (``q``, ``v``;
+    ``y`` stacks them as (nq + nv, n) like ``solve_ivp``), ``status`` (0 reached
+    the end, -1 stopped: see ``cause``), ``message``, ``success``, counts
+    ``nfev`` (right-hand-side calls), ``njev`` (Jacobians; ``None`` when the method
+    has none or does not count them), ``nsteps``, ``nrejected`` (``None`` when
+    unknown), ``nevents``. Per clearance joint: ``result.joint("R1").normal_force``.
+    Every array is also ``result["KEY"]`` (the module docstring lists them).
+    """
+
+    scene: str
+    status: int
+    message: str
+    cause: str | None
+    t_end: float
+    counts: dict[str, float]
+    arrays: dict[str, np.ndarray]
+    metadata: dict[str, Any] = field(default_factory=dict)
+
+    @property
+    def success(self) -> bool:
+        return self.status == 0
+
+    def __getitem__(self, key: str) -> np.ndarray:
+        try:
+            return self.arrays[key]
+        except KeyError:
+            raise KeyError(f"result of scene {self.scene!r} has no array {key!r}; it has {sorted(self.arrays)}") from None
+
+    def keys(self) -> list[str]:
+        return sorted(self.arrays)
+
+    @property
+    def t(self) -> np.ndarray:
+        return self.arrays["t"]
+
+    @property
+    def q(self) -> np.ndarray:
+        return self.arrays["q"]
+
+    @property
+    def v(self) -> np.ndarray:
+        return self.arrays["v"]
+
+    @property
+    def y(self) -> np.ndarray:
+        return np.hstack([self.q, self.v]).T
+
+    def __getattr__(self, name: str):
+        if name in COUNT_ALIASES:
+            value = self.__dict__["counts"].get(COUNT_ALIASES[name])
+            return None if value is None or value < 0 else int(value)
+        raise AttributeError(f"{type(self).__name__!r} object has no attribute {name!r}")
+
+    @property
+    def clearance_joints(self) -> list[str]:
+        return list(self.metadata.get("clearance", []))
+
+    def joint(self, name: str) -> JointSeries:
+        """The arrays of clearance joint ``name`` (one of :attr:`clearance_joints`)."""
+        if name not in self.clearance_joints:
+            raise ResultFileError(
+                f"joint={name!r} is not a clearance joint of scene {self.scene!r}; its clearance joints are {self.clearance_joints}"
+            )
+        prefix = f"{name}_"
+        return JointSeries(name, {k[len(prefix):]: v for k, v in self.arrays.items() if k.startswith(prefix)})
+
+    def save(self, path: str | Path) -> Path:
+        """Write the result file (:func:`save_result`)."""
+        return save_result(self, path)
+
+    def __repr__(self) -> str:
+        n = len(self.arrays.get("t", ()))
+        return (
+            f"Result(scene={self.scene!r}, status={self.status}, success={self.success}, t_end={self.t_end:g}, "
+            f"records={n}, nfev={self.nfev}, nsteps={self.nsteps}, clearance_joints={self.clearance_joints}, message={self.message!r})"
+        )
+
+
+#: the former name of :class:`Result` (kept as an alias)
+SimulationResult = Result
+
+
+def compute_outputs(dynamics: D.DynamicsModel, trajectory: Trajectory) -> dict[str, np.ndarray]:
+    """Evaluate every recorded state; arrays sorted by time (events are interleaved)."""
+    mechanism = dynamics.mechanism
+    model = mechanism.model
+    workspace = D.make_workspace(dynamics)
+    data = workspace.data
+    order = np.argsort(trajectory.t, kind="stable")
+    t = trajectory.t[order]
+    y = trajectory.y[order]
+    onset = trajectory.onset_rates[order]
+    n, nq, nv = len(t), dynamics.nq, dynamics.nv
+    q_all, v_all = y[:, :nq], y[:, nq : nq + nv]
+    out: dict[str, np.ndarray] = {
+        "t": t,
+        "q": q_all,
+        "v": v_all,
+        "record_kind": trajectory.kind[order],
+        "onset_rates": onset,
+        "driving_force": np.empty((n, mechanism.n_actuators)),
+        "ee_position": np.empty((n, 3)),
+        "ee_velocity": np.empty((n, 3)),
+        "ee_acceleration": np.empty((n, 3)),
+        "constraint_residual": np.empty(n),
+        "kinetic_energy": np.empty(n),
+        "potential_energy": np.empty(n),
+        "actuator_power": np.empty(n),
+        "contact_power": np.empty(n),
+        "actuator_work": y[:, nq + nv],
+        "contact_work": y[:, nq + nv + 1],
+    }
+    # per clearance joint: the arrays its type records (clearance_contact.ClearanceJoint.result_arrays)
+    per_site = {contact.site.name: contact.law.result_arrays(n) for contact in dynamics.contacts}
+    ee = dynamics.end_effector_frame
+    act = mechanism.actuator_v_index
+    for i in range(n):
+        q = D.normalise_quaternions(mechanism, q_all[i])
+        v = v_all[i]
+        evaluation = D.evaluate(dynamics, workspace, float(t[i]), q, v, onset[i])
+        force = evaluation.driving_force(dynamics.constraints)
+        out["driving_force"][i] = force
+        out["constraint_residual"][i] = np.max(np.abs(evaluation.residual)) if evaluation.residual.size else 0.0
+        out["actuator_power"][i] = force @ v[act]
+        out["contact_power"][i] = evaluation.generalized_contact_force @ v
+        pin.forwardKinematics(model, data, q, v, evaluation.qdd)
+        pin.updateFramePlacements(model, data)
+        out["ee_position"][i] = data.oMf[ee].translation
+        out["ee_velocity"][i] = pin.getFrameVelocity(model, data, ee, LWA).linear
+        out["ee_acceleration"][i] = pin.getFrameClassicalAcceleration(model, data, ee, LWA).linear
+        out["kinetic_energy"][i], out["potential_energy"][i] = D.energy(dynamics, workspace, q, v)
+        for contact, result in zip(dynamics.contacts, evaluation.contacts):
+            contact.law.record(per_site[contact.site.name], i, result)
+    for name, arrays in per_site.items():
+        for key, value in arrays.items():
+            out[f"{name}_{key}"] = value
+    return out
+
+
+def make_result(scene_name: str, dynamics: D.DynamicsModel, trajectory: Trajectory, metadata: dict[str, Any]) -> Result:
+    counts = {
+        "n_steps": trajectory.n_steps,
+        "n_rejected": trajectory.n_rejected,
+        "n_rhs": trajectory.n_rhs,
+        "n_events": trajectory.n_events,
+        "n_restarts": trajectory.n_restarts,
+        "n_jacobians": trajectory.n_jacobians,
+        "cpu_time": trajectory.cpu_time,
+        "wall_time": trajectory.wall_time,
+    }
+    arrays = compute_outputs(dynamics, trajectory)
+    if trajectory.events:
+        arrays["event_t"] = np.array([e[0] for e in trajectory.events])
+        arrays["event_candidate"] = np.array([e[1] for e in trajectory.events], dtype=int)
+        arrays["event_is_onset"] = np.array([e[2] == "onset" for e in trajectory.events])
+        arrays["event_kind"] = np.array([_EVENT_KINDS[e[2]] for e in trajectory.events], dtype=np.int8)
+        arrays["event_value"] = np.array([e[3] for e in trajectory.events])
+    return Result(scene_name, trajectory.status, trajectory.message, trajectory.cause, trajectory.t_end, counts, arrays, metadata)
+
+
+def save_result(result: Result, path: str | Path) -> Path:
+    """Write the result as one ``.npz`` file, atomically (header as JSON in ``__meta__``)."""
+    header = {
+        "format_version": FORMAT_VERSION,
+        "scene": result.scene,
+        "status": result.status,
+        "message": result.message,
+        "cause": result.cause,
+        "t_end": result.t_end,
+        "counts": result.counts,
+        "metadata": result.metadata,
+    }
+    payload = dict(result.arrays)
+    payload["__meta__"] = np.array(json.dumps(header))
+    for key, value in result.counts.items():
+        payload[key] = np.array(value)
+
+    def write(tmp: Path) -> None:
+        with open(tmp, "wb") as handle:
+            np.savez_compressed(handle, **payload)
+
+    return atomic_write(path, write)
+
+
+def load_result(path: str | Path, *, urdf_text: str | None = None) -> Result:
+    """Read a result file written by :func:`save_result`.
+
+    Raises :class:`ResultFileError` if the file is missing or malformed, or (when
+    ``urdf_text`` is given) if it was produced with another mechanism.
+    """
+    path = Path(path)
+    if not path.is_file():
+        raise ResultFileError(f"result file {str(path)!r} does not exist; run scripts/simulate.py first")
+    try:
+        with np.load(path, allow_pickle=False) as archive:
+            arrays = {key: archive[key] for key in archive.files}
+    except Exception as exc:  # noqa: BLE001 - any reading failure means a malformed file
+        raise ResultFileError(f"result file {str(path)!r} is not a readable .npz archive ({exc})") from None
+    if "__meta__" not in arrays:
+        raise ResultFileError(f"result file {str(path)!r} has no header: it was not written by this simulator")
+    try:
+        header = json.loads(str(arrays.pop("__meta__")))
+    except json.JSONDecodeError as exc:
+        raise ResultFileError(f"result file {str(path)!r} has a corrupt header ({exc})") from None
+    if header.get("format_version") != FORMAT_VERSION:
+        raise ResultFileError(f"result file {str(path)!r} has format version {header.get('format_version')}, expected {FORMAT_VERSION}")
+    for key in ("t", "q", "v", "driving_force", "ee_position"):
+        if key not in arrays:
+            raise ResultFileError(f"result file {str(path)!r} lacks the array {key!r}")
+    metadata = header.get("metadata", {})
+    if urdf_text is not None and metadata.get("urdf_sha256") != mechanism_fingerprint(urdf_text):
+        raise ResultFileError(
+            f"result file {str(path)!r} was computed with mechanism {metadata.get('mechanism')!r}, "
+            "not with the mechanism file given"
+        )
+    for key in header.get("counts", {}):
+        arrays.pop(key, None)
+    return Result(
+        header["scene"], header["status"], header["message"], header["cause"], header["t_end"], header["counts"], arrays, metadata
+    )
+
+
+def mechanism_fingerprint(urdf_text: str) -> str:
+    """SHA-256 of the mechanism file text (stored in results to match them to mechanisms)."""
+    return hashlib.sha256(urdf_text.encode("utf-8")).hexdigest()

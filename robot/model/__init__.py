@@ -1,0 +1,1 @@
+"""URDF -> Pinocchio model: mechanism description, closures, kinematics, drives."""

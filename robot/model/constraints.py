@@ -1,0 +1,340 @@
+"""Constraint equations Phi(q, t) = 0, their Jacobian Phi_q and acceleration term gamma.
+
+Seed paper eqs (18)-(23): universal, prismatic, revolute and spherical joint
+constraints, and the driving constraints; here the universal, prismatic and
+ideal revolute joints are joints of Pinocchio's tree (they hold by
+construction), so the constraint set holds only
+
+* **closures** (paper eq. (21), spherical; a revolute closure adds eq. (20)):
+  spherical  ``Phi = p_a - p_b``  (3 rows, world axes);
+  revolute   additionally ``z_a . x_b = 0``, ``z_a . y_b = 0`` (axes parallel);
+* **driving constraints** (paper eq. (22)): ``Phi_k = q_k - s_k(t)`` for each
+  actuated joint k (its coordinate is the actuator length);
+* optionally **centring constraints** of clearance sites, used only to assemble
+  the initial state (ball centred in its socket, journal axis on the bearing axis,
+  with an optional bearing misalignment).
+
+Velocity and acceleration (paper eq. (24)):
+``Phi_q qd = -Phi_t`` and ``Phi_q qdd = gamma``, with
+``gamma = -(d/dt Phi_q) qd - Phi_tt`` computed from Pinocchio's classical
+frame accelerations at zero joint acceleration. Baumgarte stabilisation
+(paper eq. (24), ref. 35) replaces ``gamma`` by
+``gamma - 2 alpha Phid - beta^2 Phi``.
+
+Pinocchio supplies kinematics and frame Jacobians (``LOCAL_WORLD_ALIGNED``:
+linear velocity of the frame origin and angular velocity, in world axes).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from functools import cached_property
+
+import numpy as np
+import pinocchio as pin
+
+from robot.model.mechanism import Closure, Mechanism
+
+LWA = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
+
+
+@dataclass(frozen=True)
+class ClosureRows:
+    """A closure with its row offset in Phi, and an optional rotation offset on frame b."""
+
+    closure: Closure
+    row: int
+    rotation_offset_b: np.ndarray | None = None
+
+
+@dataclass(frozen=True, eq=False)
+class ConstraintSet:
+    """Which constraint equations are imposed: closures, drivers, centring of clearance sites.
+
+    Rows: closures first (in mechanism order), then the centring constraints, then
+    one driving row per actuator when ``driven``.
+    """
+
+    mechanism: Mechanism
+    closures: tuple[ClosureRows, ...]
+    driven: bool
+
+    @cached_property
+    def n_closure_rows(self) -> int:
+        return sum(c.closure.n_equations for c in self.closures)
+
+    @cached_property
+    def n_rows(self) -> int:
+        return self.n_closure_rows + (self.mechanism.n_actuators if self.driven else 0)
+
+    @property
+    def driving_rows(self) -> slice:
+        return slice(self.n_closure_rows, self.n_rows)
+
+    @cached_property
+    def row_labels(self) -> tuple[str, ...]:
+        """One name per row of Phi: ``CLOSURE:x|y|z`` (world axes), ``CLOSURE:rot_x|rot_y`` (the revolute
+        axis rows along frame b's x and y axes), ``JOINT:drive``."""
+        labels = []
+        for rows in self.closures:
+            components = ("x", "y", "z", "rot_x", "rot_y")[: rows.closure.n_equations]
+            labels += [f"{rows.closure.name}:{component}" for component in components]
+        if self.driven:
+            labels += [f"{joint}:drive" for joint in self.mechanism.actuated_joints]
+        return tuple(labels)
+
+
+def constraint_set(
+    mechanism: Mechanism,
+    *,
+    driven: bool = True,
+    centre_clearance: bool = False,
+    misalignment: dict[str, np.ndarray] | None = None,
+) -> ConstraintSet:
+    """The constraints of ``mechanism``.
+
+    ``centre_clearance`` adds, for every clearance site, the equations of the
+    ideal joint it replaces (used for the initial assembly). ``misalignment``
+    maps a revolute site name to a rotation applied to its inner element frame
+    in those centring equations, so the assembled bearing axis is the journal axis
+    rotated by it.
+    """
+    rows = []
+    offset = 0
+    for closure in mechanism.closures:
+        rows.append(ClosureRows(closure, offset))
+        offset += closure.n_equations
+    if centre_clearance:
+        misalignment = misalignment or {}
+        for site in mechanism.clearance_sites:
+            closure = Closure(site.name, site.kind, site.outer_frame, site.inner_frame)
+            rows.append(ClosureRows(closure, offset, misalignment.get(site.name)))
+            offset += closure.n_equations
+    return ConstraintSet(mechanism, tuple(rows), driven)
+
+
+def _frame_b_rotation(data: pin.Data, rows: ClosureRows) -> np.ndarray:
+    rotation = data.oMf[rows.closure.frame_b].rotation
+    return rotation if rows.rotation_offset_b is None else rotation @ rows.rotation_offset_b
+
+
+def residual(constraints: ConstraintSet, data: pin.Data, q: np.ndarray, drive: np.ndarray | None) -> np.ndarray:
+    """Phi(q, t). Requires ``framesForwardKinematics`` (or forwardKinematics + updateFramePlacements) at q.
+
+    ``drive`` holds the prescribed actuator coordinates s(t) (ignored if not driven).
+    """
+    phi = np.empty(constraints.n_rows)
+    for rows in constraints.closures:
+        _closure_residual(constraints.mechanism.model, data, rows, phi)
+    if constraints.driven:
+        phi[constraints.driving_rows] = q[constraints.mechanism.actuator_q_index] - drive
+    return phi
+
+
+def jacobian(constraints: ConstraintSet, model: pin.Model, data: pin.Data) -> np.ndarray:
+    """Phi_q (n_rows x nv). Requires ``computeJointJacobians`` and ``updateFramePlacements`` at q."""
+    mechanism = constraints.mechanism
+    phi_q = np.zeros((constraints.n_rows, model.nv))
+    for rows in constraints.closures:
+        _closure_jacobian(model, data, rows, phi_q)
+    if constraints.driven:
+        phi_q[np.arange(constraints.driving_rows.start, constraints.n_rows), mechanism.actuator_v_index] = 1.0
+    return phi_q
+
+
+def gamma(
+    constraints: ConstraintSet,
+    model: pin.Model,
+    data: pin.Data,
+    drive_acceleration: np.ndarray | None,
+) -> np.ndarray:
+    """gamma = -(d/dt Phi_q) qd - Phi_tt, the right-hand side of Phi_q qdd = gamma.
+
+    Requires ``forwardKinematics(model, data, q, v, 0)`` and ``updateFramePlacements``:
+    the classical frame accelerations are then the velocity-product terms.
+    """
+    out = np.empty(constraints.n_rows)
+    for rows in constraints.closures:
+        _closure_gamma(model, data, rows, out)
+    if constraints.driven:
+        out[constraints.driving_rows] = drive_acceleration
+    return out
+
+
+def velocity_rhs(constraints: ConstraintSet, drive_rate: np.ndarray | None) -> np.ndarray:
+    """-Phi_t: the right-hand side of Phi_q qd = -Phi_t (only drivers depend on t)."""
+    out = np.zeros(constraints.n_rows)
+    if constraints.driven:
+        out[constraints.driving_rows] = drive_rate
+    return out
+
+
+class ConstraintKernel:
+    """Phi, Phi_q and gamma of one :class:`ConstraintSet` on one ``pin.Data``, for the hot path.
+
+    The same equations as :func:`residual`, :func:`jacobian` and :func:`gamma`
+    (``tests/test_integrators.py`` checks them equal), organised for speed: the
+    frame translations are numpy *views* into the Pinocchio ``Data`` bound once
+    (they follow every kinematics update), the spherical closures' Jacobian rows
+    come from one ``getConstraintsJacobian`` call on ``CONTACT_3D`` /
+    ``LOCAL_WORLD_ALIGNED`` constraint models (the same rows ``p_a - p_b`` in world
+    axes), 3-vectors are handled as Python floats, and ``Phi_q`` is a buffer whose
+    constant driving rows are written once. Revolute closures (and centring rows)
+    use the reference code row by row.
+
+    Requires, at (q, v): ``computeAllTerms`` (or ``forwardKinematics(q, v, 0)`` +
+    ``computeJointJacobians``) and ``updateFramePlacements`` on ``data``.
+    """
+
+    def __init__(self, constraints: ConstraintSet, data: pin.Data):
+        mechanism = constraints.mechanism
+        model = mechanism.model
+        self.constraints = constraints
+        self.model = model
+        self.data = data
+        self.n_rows = constraints.n_rows
+        self.n_closure_rows = constraints.n_closure_rows
+        self.driven = constraints.driven
+        self.actuator_q = np.asarray(mechanism.actuator_q_index, dtype=int)
+        self._spherical = []  # (frame_a, frame_b, translation view a, translation view b)
+        self._others = []  # ClosureRows handled by the reference code
+        rows = []
+        self._models = pin.StdVec_RigidConstraintModel()
+        self._datas = pin.StdVec_RigidConstraintData()
+        for closure_rows in constraints.closures:
+            closure = closure_rows.closure
+            if closure.kind == "spherical":
+                fa, fb = model.frames[closure.frame_a], model.frames[closure.frame_b]
+                self._spherical.append(
+                    (closure.frame_a, closure.frame_b, data.oMf[closure.frame_a].translation, data.oMf[closure.frame_b].translation)
+                )
+                self._models.append(
+                    pin.RigidConstraintModel(pin.ContactType.CONTACT_3D, model, fa.parentJoint, fa.placement, fb.parentJoint, fb.placement, LWA)
+                )
+                rows.extend(range(closure_rows.row, closure_rows.row + 3))
+            else:
+                self._others.append(closure_rows)
+        for constraint_model in self._models:
+            self._datas.append(constraint_model.createData())
+        self._calcs = [(m.calc, d) for m, d in zip(self._models, self._datas)]
+        self._rows = np.array(rows, dtype=int)
+        # the spherical rows usually come first and contiguous: a slice is cheaper than fancy indexing
+        n_sph = len(rows)
+        self._sph_slice = slice(0, n_sph) if rows == list(range(n_sph)) else None
+        self.phi_q = np.zeros((self.n_rows, model.nv))
+        if self.driven:
+            self.phi_q[np.arange(constraints.driving_rows.start, self.n_rows), mechanism.actuator_v_index] = 1.0
+
+    def residual(self, q: np.ndarray, drive: np.ndarray | None) -> np.ndarray:
+        """Phi(q, t) (as :func:`residual`); needs frame placements only."""
+        values = []
+        for _, _, ta, tb in self._spherical:
+            xa, ya, za = ta.tolist()
+            xb, yb, zb = tb.tolist()
+            values += (xa - xb, ya - yb, za - zb)
+        return self._assemble(values, q[self.actuator_q] - drive if self.driven else None, _closure_residual)
+
+    def update(self, q: np.ndarray, drive: np.ndarray | None, drive_acceleration: np.ndarray | None) -> tuple[np.ndarray, np.ndarray]:
+        """Phi and gamma (new arrays); ``self.phi_q`` is overwritten with Phi_q."""
+        model, data = self.model, self.data
+        classical = pin.getFrameClassicalAcceleration
+        values, accelerations = [], []
+        for fa, fb, ta, tb in self._spherical:
+            xa, ya, za = ta.tolist()
+            xb, yb, zb = tb.tolist()
+            values += (xa - xb, ya - yb, za - zb)
+            # gamma = -(a_a - a_b) (classical accelerations at zero joint acceleration)
+            accelerations += (classical(model, data, fb, LWA) - classical(model, data, fa, LWA)).linear.tolist()
+        if self._spherical:
+            for calc, constraint_data in self._calcs:
+                calc(model, data, constraint_data)
+            jac = pin.getConstraintsJacobian(model, data, self._models, self._datas)
+            if self._sph_slice is not None:
+                self.phi_q[self._sph_slice] = jac
+            else:
+                self.phi_q[self._rows] = jac
+        phi = self._assemble(values, q[self.actuator_q] - drive if self.driven else None, _closure_residual)
+        gam = self._assemble(accelerations, drive_acceleration if self.driven else None, _closure_gamma)
+        for rows in self._others:
+            _closure_jacobian(model, data, rows, self.phi_q)
+        return phi, gam
+
+    def stabilised_drift(
+        self,
+        q: np.ndarray,
+        v: np.ndarray,
+        drive: np.ndarray | None,
+        drive_rate: np.ndarray | None,
+        drive_acceleration: np.ndarray | None,
+        two_alpha: float,
+        beta_squared: float,
+    ) -> np.ndarray:
+        """``2 alpha Phid + beta^2 Phi - gamma`` (minus the stabilised right-hand side), ``self.phi_q`` updated.
+
+        The Python right-hand side's form of :meth:`update` (mechanisms with
+        revolute closures; the others use :mod:`robot.dynamics.rhs_kernels`).
+        """
+        phi, gam = self.update(q, drive, drive_acceleration)
+        phi_dot = self.phi_q @ v
+        if self.driven:
+            phi_dot[self.n_closure_rows :] -= drive_rate
+        return two_alpha * phi_dot + beta_squared * phi - gam
+
+    def _assemble(self, spherical_values: list, driving: np.ndarray | None, other) -> np.ndarray:
+        out = np.empty(self.n_rows)
+        if self._sph_slice is not None:
+            out[self._sph_slice] = spherical_values
+        elif self._spherical:
+            out[self._rows] = spherical_values
+        for rows in self._others:
+            other(self.model, self.data, rows, out)
+        if driving is not None:
+            out[self.n_closure_rows :] = driving
+        return out
+
+
+def _closure_residual(model: pin.Model, data: pin.Data, rows: ClosureRows, out: np.ndarray) -> None:
+    """Rows of one closure in Phi (reference equations of :func:`residual`)."""
+    a, b, r = rows.closure.frame_a, rows.closure.frame_b, rows.row
+    out[r : r + 3] = data.oMf[a].translation - data.oMf[b].translation
+    if rows.closure.kind == "revolute":
+        z_a = data.oMf[a].rotation[:, 2]
+        rotation_b = _frame_b_rotation(data, rows)
+        out[r + 3] = z_a @ rotation_b[:, 0]
+        out[r + 4] = z_a @ rotation_b[:, 1]
+
+
+def _closure_jacobian(model: pin.Model, data: pin.Data, rows: ClosureRows, out: np.ndarray) -> None:
+    """Rows of one closure in Phi_q (reference equations of :func:`jacobian`)."""
+    a, b, r = rows.closure.frame_a, rows.closure.frame_b, rows.row
+    jac_a = pin.getFrameJacobian(model, data, a, LWA)
+    jac_b = pin.getFrameJacobian(model, data, b, LWA)
+    out[r : r + 3] = jac_a[:3] - jac_b[:3]
+    if rows.closure.kind == "revolute":
+        z_a = data.oMf[a].rotation[:, 2]
+        rotation_b = _frame_b_rotation(data, rows)
+        relative = jac_a[3:] - jac_b[3:]
+        out[r + 3] = np.cross(z_a, rotation_b[:, 0]) @ relative
+        out[r + 4] = np.cross(z_a, rotation_b[:, 1]) @ relative
+
+
+def _closure_gamma(model: pin.Model, data: pin.Data, rows: ClosureRows, out: np.ndarray) -> None:
+    """Rows of one closure in gamma (reference equations of :func:`gamma`)."""
+    a, b, r = rows.closure.frame_a, rows.closure.frame_b, rows.row
+    acc_a = pin.getFrameClassicalAcceleration(model, data, a, LWA)
+    acc_b = pin.getFrameClassicalAcceleration(model, data, b, LWA)
+    out[r : r + 3] = -(acc_a.linear - acc_b.linear)
+    if rows.closure.kind == "revolute":
+        vel_a = pin.getFrameVelocity(model, data, a, LWA).angular
+        vel_b = pin.getFrameVelocity(model, data, b, LWA).angular
+        z_a = data.oMf[a].rotation[:, 2]
+        rotation_b = _frame_b_rotation(data, rows)
+        d_omega = vel_a - vel_b
+        d_alpha = acc_a.angular - acc_b.angular
+        z_a_dot = np.cross(vel_a, z_a)
+        for k in (0, 1):
+            axis_b = rotation_b[:, k]
+            axis_b_dot = np.cross(vel_b, axis_b)
+            cross = np.cross(z_a, axis_b)
+            cross_dot = np.cross(z_a_dot, axis_b) + np.cross(z_a, axis_b_dot)
+            out[r + 3 + k] = -(d_alpha @ cross + d_omega @ cross_dot)

@@ -1,0 +1,229 @@
+"""Reading a URDF file with the project's closure declarations.
+
+URDF has no spherical joints and no kinematic loops. This project declares loop
+closures in a custom ``<closures>`` element of the same file (Pinocchio and
+yourdfpy ignore unknown elements)::
+
+    <closures>
+      <closure name="S1" type="spherical">
+        <parent link="limb5_piston" xyz="0 0 0" rpy="0 0 0"/>
+        <child  link="platform"     xyz="0 0 0" rpy="0 0 0"/>
+      </closure>
+      <closure name="K" type="revolute">
+        <parent link="rod" xyz="..."/> <child link="slider" xyz="..."/>
+        <axis xyz="0 0 1"/>                 <!-- in the parent frame -->
+      </closure>
+    </closures>
+
+Actuated joints are the joints named in standard ``<transmission>`` elements, in
+file order. This module only parses and validates; it builds no model.
+"""
+
+from __future__ import annotations
+
+import xml.etree.ElementTree as ET
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from robot.errors import MechanismFileError
+
+CLOSURE_TYPES = ("spherical", "revolute")
+
+
+@dataclass(frozen=True)
+class FrameOnLink:
+    """A frame fixed to a link: translation ``xyz`` and URDF roll-pitch-yaw ``rpy``."""
+
+    link: str
+    xyz: tuple[float, float, float]
+    rpy: tuple[float, float, float]
+
+
+@dataclass(frozen=True)
+class ClosureDeclaration:
+    """A loop-closing joint between frames on two links (``<closure>`` element)."""
+
+    name: str
+    kind: str
+    parent: FrameOnLink
+    child: FrameOnLink
+    axis: tuple[float, float, float] | None  # revolute: unit axis in the parent frame
+
+
+@dataclass(frozen=True)
+class JointDeclaration:
+    """The parts of a URDF ``<joint>`` the project needs beyond Pinocchio's model."""
+
+    name: str
+    kind: str
+    parent: str
+    child: str
+    axis: tuple[float, float, float]
+    lower: float | None
+    upper: float | None
+
+
+@dataclass(frozen=True)
+class MechanismDescription:
+    """A parsed mechanism file: URDF text, joints, closures and actuated joints."""
+
+    path: Path | None
+    name: str
+    urdf_text: str
+    links: tuple[str, ...]
+    joints: dict[str, JointDeclaration]
+    closures: tuple[ClosureDeclaration, ...]
+    actuated_joints: tuple[str, ...]
+
+
+def _vector(element: ET.Element, attribute: str, where: str, default: str = "0 0 0") -> tuple[float, float, float]:
+    text = element.get(attribute, default)
+    try:
+        values = tuple(float(x) for x in text.split())
+    except ValueError:
+        raise MechanismFileError(f"{where}: attribute {attribute}={text!r} must be three numbers") from None
+    if len(values) != 3 or not all(np.isfinite(values)):
+        raise MechanismFileError(f"{where}: attribute {attribute}={text!r} must be three finite numbers")
+    return values  # type: ignore[return-value]
+
+
+def _frame(element: ET.Element | None, role: str, closure: str, links: set[str]) -> FrameOnLink:
+    where = f"closure {closure!r}"
+    if element is None:
+        raise MechanismFileError(f"{where}: missing <{role} link=... xyz=... rpy=...> element")
+    link = element.get("link")
+    if link is None:
+        raise MechanismFileError(f"{where}: <{role}> has no 'link' attribute")
+    if link not in links:
+        raise MechanismFileError(
+            f"{where}: <{role} link={link!r}> names a link that is not in the URDF "
+            f"(links: {', '.join(sorted(links))})"
+        )
+    return FrameOnLink(link, _vector(element, "xyz", f"{where} <{role}>"), _vector(element, "rpy", f"{where} <{role}>"))
+
+
+def _read_text(source: str | Path, is_text: bool) -> tuple[str, Path | None]:
+    if is_text:
+        return str(source), None
+    path = Path(source)
+    if not path.is_file():
+        raise MechanismFileError(f"mechanism file {str(path)!r} does not exist")
+    return path.read_text(encoding="utf-8"), path
+
+
+def _links(root: ET.Element, label: str) -> list[str]:
+    links = [link.get("name", "") for link in root.findall("link")]
+    if "" in links:
+        raise MechanismFileError(f"{label}: a <link> has no name")
+    if len(set(links)) != len(links):
+        raise MechanismFileError(f"{label}: duplicate link names")
+    return links
+
+
+def _limits(element: ET.Element, name: str, kind: str, label: str) -> tuple[float | None, float | None]:
+    limit = element.find("limit")
+    if limit is None or kind not in ("prismatic", "revolute"):
+        return None, None
+    try:
+        lower = float(limit.get("lower", "nan"))
+        upper = float(limit.get("upper", "nan"))
+    except ValueError:
+        raise MechanismFileError(f"{label}: joint {name!r} has non-numeric limits") from None
+    return (None if np.isnan(lower) else lower), (None if np.isnan(upper) else upper)
+
+
+def _joints(root: ET.Element, link_set: set[str], label: str) -> dict[str, JointDeclaration]:
+    joints: dict[str, JointDeclaration] = {}
+    for element in root.findall("joint"):
+        name = element.get("name")
+        kind = element.get("type")
+        parent = element.find("parent")
+        child = element.find("child")
+        if not name or not kind or parent is None or child is None:
+            raise MechanismFileError(f"{label}: joint {name!r} needs name, type, <parent> and <child>")
+        if name in joints:
+            raise MechanismFileError(f"{label}: duplicate joint name {name!r}")
+        for role, link in (("parent", parent.get("link")), ("child", child.get("link"))):
+            if link not in link_set:
+                raise MechanismFileError(f"{label}: joint {name!r} {role} link {link!r} is not defined")
+        axis_element = element.find("axis")
+        axis = _vector(axis_element, "xyz", f"joint {name!r} <axis>", "1 0 0") if axis_element is not None else (1.0, 0.0, 0.0)
+        lower, upper = _limits(element, name, kind, label)
+        joints[name] = JointDeclaration(name, kind, parent.get("link"), child.get("link"), axis, lower, upper)
+    return joints
+
+
+def _closure_axis(element: ET.Element, name: str, label: str) -> tuple[float, float, float]:
+    axis_element = element.find("axis")
+    if axis_element is None:
+        raise MechanismFileError(f"{label}: revolute closure {name!r} needs <axis xyz=.../>")
+    axis_vector = np.array(_vector(axis_element, "xyz", f"closure {name!r} <axis>"))
+    norm = float(np.linalg.norm(axis_vector))
+    if norm < 1e-12:
+        raise MechanismFileError(f"{label}: revolute closure {name!r} has a zero axis")
+    return tuple(float(x) for x in axis_vector / norm)
+
+
+def _closures(root: ET.Element, joints: dict, link_set: set[str], label: str) -> list[ClosureDeclaration]:
+    closures: list[ClosureDeclaration] = []
+    closures_element = root.find("closures")
+    for element in closures_element.findall("closure") if closures_element is not None else []:
+        name = element.get("name")
+        kind = element.get("type")
+        if not name:
+            raise MechanismFileError(f"{label}: a <closure> has no name")
+        if name in joints or name in [c.name for c in closures]:
+            raise MechanismFileError(f"{label}: closure name {name!r} is already used by a joint or closure")
+        if kind not in CLOSURE_TYPES:
+            raise MechanismFileError(f"{label}: closure {name!r} has type={kind!r}; valid types: {', '.join(CLOSURE_TYPES)}")
+        parent = _frame(element.find("parent"), "parent", name, link_set)
+        child = _frame(element.find("child"), "child", name, link_set)
+        axis = _closure_axis(element, name, label) if kind == "revolute" else None
+        closures.append(ClosureDeclaration(name, kind, parent, child, axis))
+    return closures
+
+
+def _actuated(root: ET.Element, joints: dict, label: str) -> list[str]:
+    actuated = []
+    for transmission in root.findall("transmission"):
+        for joint in transmission.findall("joint"):
+            joint_name = joint.get("name")
+            if joint_name not in joints:
+                raise MechanismFileError(
+                    f"{label}: transmission {transmission.get('name')!r} names joint {joint_name!r}, which is not defined"
+                )
+            if joints[joint_name].kind not in ("prismatic", "revolute", "continuous"):
+                raise MechanismFileError(f"{label}: actuated joint {joint_name!r} must be 1-DOF, is {joints[joint_name].kind}")
+            actuated.append(joint_name)
+    return actuated
+
+
+def parse_mechanism(source: str | Path, *, is_text: bool = False) -> MechanismDescription:
+    """Parse a URDF file (or text, ``is_text=True``) with closure declarations.
+
+    Raises :class:`MechanismFileError` for unreadable XML, a missing ``<robot>``
+    root, duplicate names, closures naming missing links, unknown closure types,
+    a revolute closure without a non-zero axis, or a transmission naming a
+    missing joint.
+    """
+    text, path = _read_text(source, is_text)
+    label = str(path) if path else "<urdf text>"
+    try:
+        root = ET.fromstring(text)
+    except ET.ParseError as exc:
+        raise MechanismFileError(f"{label}: malformed XML ({exc}); fix the file or regenerate it") from None
+    if root.tag != "robot":
+        raise MechanismFileError(f"{label}: root element is <{root.tag}>, a URDF needs <robot>")
+    links = _links(root, label)
+    joints = _joints(root, set(links), label)
+    return MechanismDescription(
+        path=path,
+        name=root.get("name", "robot"),
+        urdf_text=text,
+        links=tuple(links),
+        joints=joints,
+        closures=tuple(_closures(root, joints, set(links), label)),
+        actuated_joints=tuple(_actuated(root, joints, label)),
+    )

@@ -1,0 +1,498 @@
+"""Scenes: one TOML file says everything a run needs.
+
+A scene names the mechanism file, the clearance joints and their parameters,
+the force and friction laws, the prescribed motion, the duration, the
+integrator, its tolerances and the Baumgarte gains. Building a scene builds only
+what it uses: the mechanism is loaded with exactly its clearance joints
+(:func:`robot.model.mechanism.build_mechanism`).
+
+Shipped scenes live in ``robot/scene/scenes/*.toml`` and are found by name; any other
+path to a ``.toml`` file works too. ``extends = "NAME_OR_PATH"`` starts from
+another scene and overrides it table by table (arrays of tables such as
+``[[clearance]]`` are replaced whole). Unknown keys and bad values raise
+:class:`robot.errors.SceneError` naming the key, the value and what is valid.
+
+Schema (defaults in brackets)::
+
+    name = "compound"                    # [file stem]
+    description = "..."
+    mechanism = "../../urdf/ups_rps.urdf"  # path relative to this file
+    end_effector = "platform"            # frame whose motion is reported
+    duration = 2.0                       # s
+    gravity = [0.0, 0.0, -9.81]          # m/s^2, world axes [default]
+
+    [trajectory]
+    type = "platform"                    # "platform" (pose through IK) or "joints"
+    preset = "reference"                 # platform: the reference motion of robot.trajectory
+    period = 1.0                         # s
+    # platform, instead of preset: x, z, roll, pitch, yaw = {offset, amplitudes, harmonics, phases}
+    # joints: one table per actuated joint: P1 = {offset, rate, amplitudes, harmonics, phases}
+
+    [solver]   method ["RK45"], rtol [1e-7], atol [1e-9], max_step [1e-3], first_step,
+               jacobian ["structured"] (implicit methods' Newton matrix; or "finite-difference")
+    [baumgarte] alpha [5.0], beta [5.0]
+    [limits]   penetration_ratio [0.5], max_residual [1e-4], min_step [1e-13], max_wall_time
+
+    [materials.steel]  youngs_modulus, poisson_ratio
+
+    [[clearance]]      # one per clearance joint
+    joint = "S1"       # the joint or closure it replaces
+    type = "spherical" # a registered joint type: "spherical", "revolute" (clearance_contact.joint_types())
+    outer_on = "child" # body carrying the socket / bearing
+    material = "steel" # or outer_material / inner_material
+    restitution = 0.9
+    friction = {law = "brown_mcphee", static = 0.07, dynamic = 0.05, transition_velocity = 5e-3}
+    # the type's own keys (its SCENE_KEYS: numbers, and names for its NAME_KEYS):
+    # spherical: ball_radius, clearance, exponent [1.5], stiffness [Hertz], dissipation
+    # revolute: journal_radius, radial_clearance, bearing_outer_radius, bearing_length,
+    #           axial_clearance, radial_exponent, axial_exponent, point_exponent, *_stiffness,
+    #           radial_law ["linear"; or "johnson", "pereira", "hertz_point"], dissipation
+    # both: dissipation ["lankarani_nikravesh"; or "hunt_crossley", "gonthier", "flores", "hu_guo"]
+
+    [initial]
+    misalignment_deg = { R1 = -0.035 }   # revolute clearance joints: bearing rotated about its
+                                         # local x axis at t = 0 (degrees, right-hand rule)
+    positions = { crank_rod = -1.4 }     # 1-DOF tree joints: coordinate at t = 0 (rad or m); held
+                                         # when independent, else a guess (robot.model.initial_state)
+    velocities = { crank_rod = 0.0 }     # their rates at t = 0 (rad/s or m/s), projected onto the constraints
+"""
+
+from __future__ import annotations
+
+import copy
+import math
+import tomllib
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, Mapping
+
+import numpy as np
+
+from clearance_contact import (
+    BrownMcPheeFriction,
+    ContactError,
+    CoulombFriction,
+    Material,
+    NoFriction,
+    joint_type,
+    joint_types,
+)
+from clearance_contact.registry import COMMON_SCENE_KEYS
+
+from robot.errors import MechanismFileError, SceneError
+from robot.model.description import parse_mechanism
+from robot.scene.overrides import apply_overrides
+from robot.dynamics.baumgarte import Baumgarte
+from robot.integration.options import STRUCTURED, FailureLimits, SolverOptions
+from robot.integration.solvers import FIXED_STEP_METHODS, METHODS
+
+SCENE_DIR = Path(__file__).resolve().parent / "scenes"
+
+_TOP_KEYS = {"name", "description", "mechanism", "end_effector", "duration", "gravity", "trajectory", "solver", "baumgarte", "limits", "materials", "clearance", "initial", "extends"}
+_SOLVER_KEYS = {"method", "rtol", "atol", "max_step", "first_step", "jacobian"}
+_BAUMGARTE_KEYS = {"alpha", "beta"}
+_LIMIT_KEYS = {"penetration_ratio", "max_residual", "min_step", "max_wall_time"}
+_MATERIAL_KEYS = {"youngs_modulus", "poisson_ratio"}
+_FRICTION_KEYS = {"law", "static", "dynamic", "transition_velocity", "viscous", "reference_force", "coefficient", "regularisation_velocity"}
+_COORDINATE_KEYS = {"offset", "rate", "amplitudes", "harmonics", "phases"}
+
+
+@dataclass(frozen=True)
+class ClearanceSpec:
+    """A clearance joint of a scene: where it is, its contact law, its initial misalignment."""
+
+    joint: str
+    kind: str
+    outer_on: str
+    law: Any
+
+
+@dataclass(frozen=True)
+class TrajectorySpec:
+    kind: str
+    period: float
+    preset: str | None
+    coordinates: dict[str, dict]
+
+
+@dataclass(frozen=True)
+class Scene:
+    """A validated scene (still independent of Pinocchio: see :func:`robot.run.build_run`)."""
+
+    name: str
+    path: Path | None
+    description: str
+    mechanism_path: Path
+    end_effector: str
+    duration: float
+    trajectory: TrajectorySpec
+    solver: SolverOptions
+    baumgarte: Baumgarte
+    limits: FailureLimits
+    clearances: tuple[ClearanceSpec, ...] = field(default_factory=tuple)
+    misalignment_deg: dict[str, float] = field(default_factory=dict)
+    gravity: tuple[float, float, float] = (0.0, 0.0, -9.81)
+    initial_positions: dict[str, float] = field(default_factory=dict)
+    initial_velocities: dict[str, float] = field(default_factory=dict)
+    #: the scene's TOML document as resolved (``extends`` merged, overrides applied)
+    document: dict[str, Any] = field(default_factory=dict, compare=False, repr=False)
+    #: the folder that relative paths of the document are relative to
+    base_dir: Path | None = field(default=None, compare=False, repr=False)
+
+    def with_changes(self, overrides: Mapping[str, Any]) -> "Scene":
+        """A new scene: this one's document with key paths changed, validated again.
+
+        ``scene.with_changes({"solver.rtol": 1e-8, "clearance.R1.radial_clearance": 2e-4})``
+        """
+        if self.path is None or self.base_dir is None:
+            raise SceneError("this scene was not loaded from a document; build it with load_scene(...)")
+        return scene_from_document(apply_overrides(self.document, overrides), self.path, self.base_dir)
+
+    @property
+    def clearance_joints(self) -> tuple[str, ...]:
+        return tuple(c.joint for c in self.clearances)
+
+
+def shipped_scenes() -> list[str]:
+    return sorted(p.stem for p in SCENE_DIR.glob("*.toml"))
+
+
+def resolve_scene_path(name_or_path: str | Path) -> Path:
+    """A shipped scene name, or a path to a TOML file."""
+    candidate = Path(name_or_path)
+    if candidate.suffix == ".toml" or candidate.exists():
+        if not candidate.is_file():
+            raise SceneError(f"scene file {str(candidate)!r} does not exist")
+        return candidate.resolve()
+    shipped = SCENE_DIR / f"{name_or_path}.toml"
+    if shipped.is_file():
+        return shipped
+    raise SceneError(f"scene {str(name_or_path)!r} is neither a file nor a shipped scene; shipped scenes: {', '.join(shipped_scenes())}")
+
+
+def _read(path: Path, seen: tuple[Path, ...] = ()) -> dict:
+    if path in seen:
+        raise SceneError(f"scene {path.name}: 'extends' forms a cycle through {', '.join(p.name for p in seen)}")
+    try:
+        data = tomllib.loads(path.read_text(encoding="utf-8"))
+    except tomllib.TOMLDecodeError as exc:
+        raise SceneError(f"scene {str(path)!r} is not valid TOML: {exc}") from None
+    parent = data.pop("extends", None)
+    if parent is None:
+        data.setdefault("__dir__", str(path.parent))
+        return data
+    if not isinstance(parent, str):
+        raise SceneError(f"scene {path.name}: extends={parent!r} must be a scene name or path", key="extends", value=parent)
+    # a .toml parent is a path relative to this scene; anything else a shipped scene name
+    parent_path = resolve_scene_path(path.parent / parent if parent.endswith(".toml") else parent)
+    merged = _read(parent_path, seen + (path,))
+    for key, value in data.items():
+        if isinstance(value, dict) and isinstance(merged.get(key), dict):
+            merged[key] = {**merged[key], **value}
+        else:
+            merged[key] = value
+    if "mechanism" in data:
+        merged["__dir__"] = str(path.parent)
+    return merged
+
+
+def _unknown(table: dict, allowed: set[str], where: str) -> None:
+    unknown = sorted(set(table) - allowed)
+    if unknown:
+        raise SceneError(
+            f"{where}: unknown key(s) {', '.join(unknown)}; valid keys: {', '.join(sorted(allowed))}", key=unknown[0], value=table[unknown[0]]
+        )
+
+
+def _number(table: dict, key: str, where: str, default=None, *, low=-math.inf, high=math.inf, low_open=False, required=False) -> float:
+    if key not in table:
+        if required:
+            raise SceneError(f"{where}: missing required key {key!r}", key=key)
+        return default
+    value = table[key]
+    if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
+        raise SceneError(f"{where}: {key}={value!r} must be a finite number", key=key, value=value)
+    ok = (value > low if low_open else value >= low) and value <= high
+    if not ok:
+        bracket = "(" if low_open else "["
+        raise SceneError(f"{where}: {key}={value!r} is out of range {bracket}{low}, {high}]", key=key, value=value)
+    return float(value)
+
+
+def _name(table: dict, key: str, where: str) -> str:
+    """The text value of ``key`` (a model's name: whether it is a known one is for its registry to say)."""
+    value = table[key]
+    if not isinstance(value, str) or not value:
+        raise SceneError(f"{where}: {key}={value!r} must be a name (a non-empty string)", key=key, value=value)
+    return value
+
+
+def _table(data: dict, key: str, where: str) -> dict:
+    value = data.get(key, {})
+    if not isinstance(value, dict):
+        raise SceneError(f"{where}: [{key}] must be a table, got {value!r}")
+    return value
+
+
+def _materials(data: dict, where: str) -> dict[str, Material]:
+    out = {}
+    for name, table in _table(data, "materials", where).items():
+        w = f"{where} [materials.{name}]"
+        if not isinstance(table, dict):
+            raise SceneError(f"{w} must be a table")
+        _unknown(table, _MATERIAL_KEYS, w)
+        try:
+            out[name] = Material(
+                _number(table, "youngs_modulus", w, required=True), _number(table, "poisson_ratio", w, required=True)
+            )
+        except ContactError as exc:
+            raise SceneError(f"{w}: {exc}", key=getattr(exc, "key", None), value=getattr(exc, "value", None)) from None
+    return out
+
+
+def _friction(table: Any, where: str):
+    if table is None:
+        return NoFriction()
+    if not isinstance(table, dict):
+        raise SceneError(f"{where}: friction must be a table, got {table!r}")
+    _unknown(table, _FRICTION_KEYS, where)
+    law = table.get("law", "none")
+    if law == "none":
+        return NoFriction()
+    if law == "brown_mcphee":
+        return BrownMcPheeFriction(
+            _number(table, "static", where, required=True),
+            _number(table, "dynamic", where, required=True),
+            _number(table, "transition_velocity", where, required=True),
+            _number(table, "viscous", where, 0.0),
+            _number(table, "reference_force", where, 1.0),
+        )
+    if law == "coulomb":
+        return CoulombFriction(_number(table, "coefficient", where, required=True), _number(table, "regularisation_velocity", where, 0.0))
+    raise SceneError(f"{where}: friction law={law!r} is not known; use 'brown_mcphee', 'coulomb' or 'none'", key="law", value=law)
+
+
+def _clearance(table: Any, index: int, materials: dict[str, Material], where: str) -> ClearanceSpec:
+    w = f"{where} [[clearance]] #{index + 1}"
+    if not isinstance(table, dict):
+        raise SceneError(f"{w} must be a table")
+    kind = table.get("type")
+    if not isinstance(kind, str) or kind not in joint_types():
+        raise SceneError(f"{w}: type={kind!r} is not a clearance joint type; registered types: {', '.join(joint_types())}", key="type", value=kind)
+    law_type = joint_type(kind)
+    _unknown(table, COMMON_SCENE_KEYS | set(law_type.SCENE_KEYS), w)
+    joint = table.get("joint")
+    if not isinstance(joint, str) or not joint:
+        raise SceneError(f"{w}: joint={joint!r} must name the joint or closure it replaces", key="joint", value=joint)
+    w = f"{where} clearance {joint!r}"
+    outer_on = table.get("outer_on", "child")
+    if outer_on not in ("child", "parent"):
+        raise SceneError(f"{w}: outer_on={outer_on!r} must be 'child' or 'parent'", key="outer_on", value=outer_on)
+
+    def material(key: str) -> Material:
+        name = table.get(key, table.get("material", "steel"))
+        if name not in materials:
+            raise SceneError(f"{w}: {key}={name!r} is not defined; defined materials: {', '.join(materials) or 'none'}")
+        return materials[name]
+
+    outer, inner = material("outer_material"), material("inner_material")
+    friction = _friction(table.get("friction"), f"{w} friction")
+    restitution = _number(table, "restitution", w, 0.9)
+    for key in law_type.REQUIRED_KEYS:
+        if key not in table:
+            raise SceneError(f"{w}: missing required key {key!r}", key=key)
+    # numbers, or names of models (NAME_KEYS: the joint checks the name against its registry)
+    parameters = {
+        key: _name(table, key, w) if key in law_type.NAME_KEYS else _number(table, key, w) for key in law_type.SCENE_KEYS if key in table
+    }
+    try:
+        law = law_type.from_scene(parameters, outer, inner, restitution, friction)
+    except ContactError as exc:
+        raise SceneError(f"{w}: {exc}", key=getattr(exc, "key", None), value=getattr(exc, "value", None)) from None
+    return ClearanceSpec(joint, kind, outer_on, law)
+
+
+def _check_site_kinds(clearances: tuple[ClearanceSpec, ...], mechanism_path: Path, where: str) -> None:
+    """Each clearance type must fit the kind of joint it replaces (its ``SITE_KINDS``).
+
+    The mechanism file is only parsed as XML here (no model is built); a joint it does
+    not have, or a file it cannot read, is left to :func:`robot.model.mechanism.build_mechanism`.
+    """
+    if not clearances:
+        return
+    try:
+        description = parse_mechanism(mechanism_path)
+    except MechanismFileError:
+        return
+    kinds = {c.name: (c.kind, "closure") for c in description.closures}
+    for name, joint in description.joints.items():
+        if joint.kind in ("revolute", "continuous"):  # a tree joint with clearance becomes a free joint
+            kinds.setdefault(name, ("revolute", "joint"))
+    for spec in clearances:
+        if spec.joint not in kinds:
+            continue
+        site_kind, element = kinds[spec.joint]
+        law_type = joint_type(spec.kind)
+        if site_kind not in law_type.SITE_KINDS:
+            fitting = [name for name in joint_types() if site_kind in joint_type(name).SITE_KINDS]
+            raise SceneError(
+                f"{where} clearance {spec.joint!r}: type={spec.kind!r} cannot replace {spec.joint!r}, a {site_kind} "
+                f"{element} of {description.name!r} (a {spec.kind} clearance joint replaces {' or '.join(law_type.SITE_KINDS)} "
+                f"joints); use type = {' or '.join(repr(n) for n in fitting) or 'a type for ' + site_kind + ' joints'}"
+            )
+
+
+def _trajectory(table: dict, where: str) -> TrajectorySpec:
+    w = f"{where} [trajectory]"
+    kind = table.get("type", "platform")
+    if kind not in ("platform", "joints"):
+        raise SceneError(f"{w}: type={kind!r} must be 'platform' or 'joints'", key="type", value=kind)
+    period = _number(table, "period", w, 1.0, low=0.0, low_open=True)
+    preset = table.get("preset")
+    coordinates = {k: v for k, v in table.items() if k not in ("type", "period", "preset")}
+    if kind == "platform":
+        from robot.model.trajectory import POSE_COORDINATES
+
+        _unknown(coordinates, set(POSE_COORDINATES), w)
+        if preset not in (None, "reference"):
+            raise SceneError(f"{w}: preset={preset!r} is not known; use 'reference' or give x, z, roll, pitch, yaw", key="preset", value=preset)
+        if preset is None and set(coordinates) != set(POSE_COORDINATES):
+            raise SceneError(f"{w}: a platform trajectory needs preset = 'reference' or all of {', '.join(POSE_COORDINATES)}")
+    elif preset is not None:
+        raise SceneError(f"{w}: preset is only for platform trajectories")
+    for name, coordinate in coordinates.items():
+        if not isinstance(coordinate, dict):
+            raise SceneError(f"{w}: {name} must be a table {{offset, rate, amplitudes, harmonics, phases}}")
+        _unknown(coordinate, _COORDINATE_KEYS, f"{w} {name}")
+        lengths = {len(coordinate.get(k, [])) for k in ("amplitudes", "harmonics", "phases")}
+        if len(lengths) > 1:
+            raise SceneError(f"{w} {name}: amplitudes, harmonics and phases must have the same length")
+    return TrajectorySpec(kind, period, preset, coordinates)
+
+
+def load_scene(name_or_path: str | Path, overrides: Mapping[str, Any] | None = None, **top_level: Any) -> Scene:
+    """Read and validate a scene.
+
+    ``overrides``: key paths and values (``{"solver.rtol": 1e-8,
+    "clearance.R1.radial_clearance": 2e-4}``, :mod:`robot.scene.overrides`);
+    ``top_level``: top-level keys as keyword arguments (``duration=0.1``; ``None``
+    values are ignored). Both are validated like the file itself.
+    """
+    path = resolve_scene_path(name_or_path)
+    data = _read(path)
+    base_dir = Path(data.pop("__dir__"))
+    data = apply_overrides(data, {**(overrides or {}), **{k: v for k, v in top_level.items() if v is not None}})
+    return scene_from_document(data, path, base_dir)
+
+
+def scene_from_document(data: dict[str, Any], path: Path, base_dir: Path) -> Scene:
+    """Validate a scene's TOML document (``extends`` already merged); relative paths from ``base_dir``."""
+    document = copy.deepcopy(data)
+    data = copy.deepcopy(data)
+    where = f"scene {path.name}"
+    _unknown(data, _TOP_KEYS, where)
+    mechanism = data.get("mechanism")
+    if not isinstance(mechanism, str):
+        raise SceneError(f"{where}: mechanism={mechanism!r} must be the path of a URDF file", key="mechanism", value=mechanism)
+    mechanism_path = (base_dir / mechanism).resolve()
+    if not mechanism_path.is_file():
+        raise SceneError(f"{where}: mechanism file {str(mechanism_path)!r} does not exist")
+    solver_table = _table(data, "solver", where)
+    _unknown(solver_table, _SOLVER_KEYS, f"{where} [solver]")
+    method = solver_table.get("method", "RK45")
+    if method not in METHODS:
+        hint = " (the CVODE methods need the scikit-sundae package: pip install scikit-sundae)" if method.startswith("CVODE") else ""
+        raise SceneError(f"{where} [solver]: method={method!r} is not on offer{hint}; choose one of {', '.join(METHODS)}", key="method", value=method)
+    w = f"{where} [solver]"
+    numbers = (
+        _number(solver_table, "rtol", w, 1e-7, low=1e-14, high=1e-1),
+        _number(solver_table, "atol", w, 1e-9, low=1e-16, high=1e-1),
+        _number(solver_table, "max_step", w, 1e-3, low=0.0, low_open=True),
+        _number(solver_table, "first_step", w, None, low=0.0, low_open=True),
+    )
+    try:
+        solver = SolverOptions(method, *numbers, jacobian=solver_table.get("jacobian", STRUCTURED))
+    except ValueError as exc:  # SolverOptions checks its choices (the jacobian)
+        raise SceneError(f"{w}: {exc}", key=getattr(exc, "key", None), value=getattr(exc, "value", None)) from None
+    if method in FIXED_STEP_METHODS and solver.first_step is None:
+        raise SceneError(f"{w}: the fixed-step method {method} needs first_step (its step size)")
+    baumgarte_table = _table(data, "baumgarte", where)
+    _unknown(baumgarte_table, _BAUMGARTE_KEYS, f"{where} [baumgarte]")
+    w = f"{where} [baumgarte]"
+    baumgarte = Baumgarte(_number(baumgarte_table, "alpha", w, 5.0, low=0.0, high=1e6), _number(baumgarte_table, "beta", w, 5.0, low=0.0, high=1e6))
+    limits_table = _table(data, "limits", where)
+    _unknown(limits_table, _LIMIT_KEYS, f"{where} [limits]")
+    w = f"{where} [limits]"
+    defaults = FailureLimits()
+    limits = FailureLimits(
+        _number(limits_table, "penetration_ratio", w, defaults.penetration_ratio, low=0.0, low_open=True),
+        _number(limits_table, "max_residual", w, defaults.max_residual, low=0.0, low_open=True),
+        _number(limits_table, "min_step", w, defaults.min_step, low=0.0),
+        _number(limits_table, "max_wall_time", w, defaults.max_wall_time, low=0.0, low_open=True),
+    )
+    materials = _materials(data, where)
+    clearance_list = data.get("clearance", [])
+    if not isinstance(clearance_list, list):
+        raise SceneError(f"{where}: clearance must be an array of tables [[clearance]]")
+    clearances = tuple(_clearance(t, i, materials, where) for i, t in enumerate(clearance_list))
+    joints = [c.joint for c in clearances]
+    if len(set(joints)) != len(joints):
+        raise SceneError(f"{where}: a joint carries two clearance definitions: {joints}")
+    _check_site_kinds(clearances, mechanism_path, where)
+    initial = _table(data, "initial", where)
+    _unknown(initial, {"misalignment_deg", "positions", "velocities"}, f"{where} [initial]")
+    misalignment = initial.get("misalignment_deg", {})
+    if not isinstance(misalignment, dict):
+        raise SceneError(f"{where} [initial]: misalignment_deg must be a table {{JOINT = degrees}}")
+    revolute = {c.joint for c in clearances if c.kind == "revolute"}
+    for joint in misalignment:
+        if joint not in revolute:
+            raise SceneError(f"{where} [initial]: misalignment_deg names {joint!r}, which is not a revolute clearance joint of the scene ({sorted(revolute)})")
+        _number(misalignment, joint, f"{where} [initial] misalignment_deg", low=-5.0, high=5.0)
+    end_effector = data.get("end_effector", "platform")
+    if not isinstance(end_effector, str):
+        raise SceneError(f"{where}: end_effector={end_effector!r} must be a frame name", key="end_effector", value=end_effector)
+    return Scene(
+        name=str(data.get("name", path.stem)),
+        path=path,
+        description=str(data.get("description", "")),
+        mechanism_path=mechanism_path,
+        end_effector=end_effector,
+        duration=_number(data, "duration", where, required=True, low=0.0, low_open=True),
+        trajectory=_trajectory(_table(data, "trajectory", where), where),
+        solver=solver,
+        baumgarte=baumgarte,
+        limits=limits,
+        clearances=clearances,
+        misalignment_deg={k: float(v) for k, v in misalignment.items()},
+        document=document,
+        base_dir=base_dir,
+        gravity=_gravity(data, where),
+        initial_positions=_joint_values(initial, "positions", f"{where} [initial]"),
+        initial_velocities=_joint_values(initial, "velocities", f"{where} [initial]"),
+    )
+
+
+def _gravity(data: dict, where: str) -> tuple[float, float, float]:
+    """``gravity = [gx, gy, gz]`` (m/s^2, world axes): three finite numbers."""
+    value = data.get("gravity", [0.0, 0.0, -9.81])
+    ok = isinstance(value, list) and len(value) == 3
+    ok = ok and all(not isinstance(x, bool) and isinstance(x, (int, float)) and math.isfinite(x) for x in value)
+    if not ok:
+        raise SceneError(f"{where}: gravity={value!r} must be three finite numbers [gx, gy, gz] in m/s^2 (world axes)")
+    return tuple(float(x) for x in value)
+
+
+def _joint_values(table: dict, key: str, where: str) -> dict[str, float]:
+    """A table ``{JOINT = number}`` (the joint names are checked against the mechanism by robot.run.build_run)."""
+    values = table.get(key, {})
+    if not isinstance(values, dict):
+        raise SceneError(f"{where}: {key}={values!r} must be a table {{JOINT = value}}")
+    return {joint: _number(values, joint, f"{where} {key}") for joint in values}
+
+
+def misalignment_rotation(degrees: float) -> np.ndarray:
+    """Rotation of the bearing about its local x axis by ``degrees`` (positive: counter-clockwise seen from +x)."""
+    angle = math.radians(degrees)
+    c, s = math.cos(angle), math.sin(angle)
+    return np.array([[1.0, 0.0, 0.0], [0.0, c, -s], [0.0, s, c]])

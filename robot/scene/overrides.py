@@ -1,0 +1,74 @@
+"""Changing scene keys by dotted path, before validation.
+
+A key path names a value of the scene's TOML document: ``duration``,
+``solver.rtol``, ``trajectory.period``, ``materials.steel.youngs_modulus``.
+Entries of the ``[[clearance]]`` array are addressed by their ``joint`` name
+(``clearance.R1.radial_clearance``, ``clearance.S1.friction.dynamic``) or by
+their index (``clearance.0.restitution``). Setting a key that the scene does not
+have yet creates it (the validation that follows rejects keys that do not
+exist in the schema, naming them); a path through a value that is not a table
+is refused here, naming the path.
+
+Used by :func:`robot.scene.loader.load_scene` (``overrides=``), the Python API
+and the sweep tool, so that a change from Python is validated exactly as the
+same change written in the file.
+"""
+
+from __future__ import annotations
+
+import copy
+from typing import Any, Mapping
+
+from robot.errors import SceneError
+
+#: arrays of tables whose entries are addressed by this key (or by index)
+ARRAY_ENTRY_KEYS = {"clearance": "joint"}
+
+
+def _array_entry(entries: list, name: str, path: str, array: str) -> dict:
+    key = ARRAY_ENTRY_KEYS[array]
+    for entry in entries:
+        if isinstance(entry, dict) and entry.get(key) == name:
+            return entry
+    if name.isdigit() and int(name) < len(entries):
+        return entries[int(name)]
+    names = [e.get(key) for e in entries if isinstance(e, dict)]
+    raise SceneError(
+        f"override {path!r}: the scene has no [[{array}]] entry with {key} = {name!r}; entries: {names}",
+        key=path,
+        value=name,
+    )
+
+
+def _container(document: dict, parts: list[str], path: str) -> dict:
+    """The table that holds the last part of ``parts`` (tables on the way are created)."""
+    node = document
+    i = 0
+    while i < len(parts) - 1:
+        part = parts[i]
+        child = node.get(part)
+        if isinstance(child, list) and part in ARRAY_ENTRY_KEYS:
+            if i + 1 >= len(parts) - 1:
+                raise SceneError(f"override {path!r} names a whole [[{part}]] entry; name one of its keys", key=path, value=None)
+            node = _array_entry(child, parts[i + 1], path, part)
+            i += 2
+            continue
+        if child is None:
+            child = node.setdefault(part, {})
+        if not isinstance(child, dict):
+            where = ".".join(parts[: i + 1])
+            raise SceneError(f"override {path!r}: {where} is {child!r}, not a table", key=path, value=child)
+        node = child
+        i += 1
+    return node
+
+
+def apply_overrides(document: Mapping[str, Any], overrides: Mapping[str, Any]) -> dict:
+    """Return a deep copy of ``document`` with each ``path -> value`` of ``overrides`` set."""
+    result = copy.deepcopy(dict(document))
+    for path, value in overrides.items():
+        if not isinstance(path, str) or not path or any(not part for part in path.split(".")):
+            raise SceneError(f"override key path {path!r} must be dotted names such as 'solver.rtol'", key=str(path), value=value)
+        parts = path.split(".")
+        _container(result, parts, path)[parts[-1]] = copy.deepcopy(value)
+    return result
