@@ -29,7 +29,7 @@ from v_0 to -v_out at delta = 0 gives (Marhefka & Orin, IEEE Trans. SMC A 29 (19
     chi - ln(1 + chi) = -chi e - ln(1 - chi e),     e = v_out / v_0
 
 solved by :func:`rebound_ratio`.  ``docs/contact-laws.md`` tabulates it for each model
-against the c_e asked for (measured by integrating impacts: ``scripts/contact_laws_table.py``).
+against the c_e asked for (measured by integrating impacts: ``clearance contact-laws``).
 
 Encoding for the compiled kernels (like the friction laws): a code and
 ``DISSIPATION_PARAMETERS`` floats, dispatched by :func:`encoded_damping_factor`;

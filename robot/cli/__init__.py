@@ -1,1 +1,1 @@
-"""The command-line program."""
+"""The command-line program ``clearance`` (:mod:`robot.cli.main`; subcommands in :mod:`robot.cli.registry`)."""

@@ -1,12 +1,93 @@
-"""Shared command-line helpers for the thin scripts in ``scripts/``."""
+"""Shared pieces of the subcommands: exit codes, option types, output checks, the progress bar."""
 
 from __future__ import annotations
 
+import argparse
+import math
 import sys
+import tempfile
 from contextlib import contextmanager
+from pathlib import Path
 from typing import Callable, Iterator
 
 from robot.errors import RobotError
+
+#: exit codes of every command
+EXIT_OK, EXIT_RUN_FAILED, EXIT_BAD_INPUT, EXIT_INTERNAL, EXIT_INTERRUPTED = 0, 1, 2, 3, 130
+
+EXIT_CODES_HELP = """exit status:
+  0    success
+  1    the run failed or was interrupted; the partial result was saved (the message says where)
+  2    bad input: scene, option, input file or output folder (the message names it; nothing was run)
+  3    internal error (a bug: please report it with the traceback)
+  130  interrupted before any result existed"""
+
+
+class UsageError(RobotError):
+    """A command-line option is invalid (or invalid together with others)."""
+
+
+class OutputError(UsageError):
+    """An output location cannot be written (checked before any run)."""
+
+
+def positive_seconds(text: str) -> float:
+    """argparse type: a finite time > 0 (s)."""
+    return _number(text, low=0.0, what="a finite number of seconds > 0")
+
+
+def positive_number(text: str) -> float:
+    """argparse type: a finite number > 0."""
+    return _number(text, low=0.0, what="a finite number > 0")
+
+
+def positive_int(text: str) -> int:
+    """argparse type: an integer >= 1."""
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not an integer >= 1") from None
+    if value < 1:
+        raise argparse.ArgumentTypeError(f"{text!r} must be an integer >= 1")
+    return value
+
+
+def number_list(text: str) -> tuple[float, ...]:
+    """argparse type: comma-separated finite numbers > 0 (e.g. tolerances, step sizes)."""
+    return tuple(_number(part, low=0.0, what="comma-separated finite numbers > 0") for part in text.split(","))
+
+
+def _number(text: str, *, low: float, what: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not {what}") from None
+    if not math.isfinite(value) or value <= low:
+        raise argparse.ArgumentTypeError(f"{text!r} is not {what}")
+    return value
+
+
+def writable_folder(path: Path, option: str = "--out") -> Path:
+    """Create ``path`` if needed and check that files can be written in it (before any run)."""
+    path = Path(path)
+    if path.exists() and not path.is_dir():
+        raise OutputError(f"{option}={str(path)!r} is a file, not a folder; give a folder for the outputs")
+    try:
+        path.mkdir(parents=True, exist_ok=True)
+        with tempfile.TemporaryFile(dir=path):
+            pass
+    except OSError as exc:
+        raise OutputError(f"{option}={str(path)!r} cannot be written ({exc.strerror or exc}); choose another folder") from None
+    return path
+
+
+def writable_file(path: Path, option: str) -> Path:
+    """Check that the file ``path`` can be written (it is not a folder; its folder is writable)."""
+    path = Path(path)
+    if path.is_dir():
+        raise OutputError(f"{option}={str(path)!r} is a folder; give a file name")
+    writable_folder(path.parent if str(path.parent) else Path("."), f"the folder of {option}")
+    return path
 
 
 @contextmanager
@@ -29,11 +110,18 @@ def progress_bar(total: float, description: str, enabled: bool | None = None) ->
         bar.close()
 
 
+def count_text(value: float | int | None, fmt: str = "d") -> str:
+    """A counter for people: ``n/a`` when unknown (``None`` or negative, the solvers' "not counted")."""
+    if value is None or value < 0:
+        return "n/a"
+    return format(value, fmt)
+
+
 def exit_on_error(main: Callable[[], int | None]) -> None:
     """Run ``main``; a library error prints its message (no traceback) and exits with status 2."""
     try:
         code = main()
     except RobotError as exc:
         print(f"error: {exc}", file=sys.stderr)
-        sys.exit(2)
+        sys.exit(EXIT_BAD_INPUT)
     sys.exit(code or 0)

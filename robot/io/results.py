@@ -57,6 +57,7 @@ the stop.
 
 from __future__ import annotations
 
+import dataclasses
 import hashlib
 import json
 from dataclasses import dataclass, field
@@ -67,9 +68,11 @@ import numpy as np
 import pinocchio as pin
 
 from robot.dynamics import equations as D
+from robot.io.array_names import ALWAYS_KEPT, is_bulk
 from robot.io.atomic import atomic_write
 from robot.errors import ResultFileError
-from robot.integration.simulation import RECORD_FORCE_PEAK, RECORD_ONSET, RECORD_PEAK, Trajectory
+from robot.integration.simulation import RECORD_FORCE_PEAK, RECORD_ONSET, RECORD_OUTPUT, RECORD_PEAK, RECORD_STEP, Trajectory
+from robot.scene.loader import OutputSpec
 
 FORMAT_VERSION = 1
 #: event log kind -> the record kind it wrote (``event_kind``)
@@ -179,9 +182,9 @@ class Result:
         prefix = f"{name}_"
         return JointSeries(name, {k[len(prefix):]: v for k, v in self.arrays.items() if k.startswith(prefix)})
 
-    def save(self, path: str | Path) -> Path:
-        """Write the result file (:func:`save_result`)."""
-        return save_result(self, path)
+    def save(self, path: str | Path, output: "OutputSpec | None" = None) -> Path:
+        """Write the result file (:func:`save_result`; ``output``: a scene's ``[output]`` selection)."""
+        return save_result(self, path, output)
 
     def __repr__(self) -> str:
         n = len(self.arrays.get("t", ()))
@@ -273,8 +276,43 @@ def make_result(scene_name: str, dynamics: D.DynamicsModel, trajectory: Trajecto
     return Result(scene_name, trajectory.status, trajectory.message, trajectory.cause, trajectory.t_end, counts, arrays, metadata)
 
 
-def save_result(result: Result, path: str | Path) -> Path:
-    """Write the result as one ``.npz`` file, atomically (header as JSON in ``__meta__``)."""
+def select_records(result: Result, output: OutputSpec) -> Result:
+    """The result as a scene's ``[output]`` table asks to keep it (a new object; arrays not copied when unchanged).
+
+    With an output grid (``output.step``, when the run recorded it: record kind 4
+    present), the ends of integration steps are dropped; the grid and every
+    located record (start, onsets, penetration and force maxima) and the last
+    record (where a failed run stopped) stay, so the peaks keep their exact
+    values. ``output.keep`` selects arrays (``t``, ``record_kind`` always stay);
+    ``output.precision = "float32"`` casts the bulk arrays (:mod:`robot.io.array_names`).
+    """
+    kind = result.arrays["record_kind"]
+    n = kind.shape[0]
+    rows = None
+    if output.step is not None and np.any(kind == RECORD_OUTPUT):
+        rows = kind != RECORD_STEP
+        rows[-1] = True
+    wanted = None if output.keep is None else set(output.keep) | set(ALWAYS_KEPT)
+    arrays = {}
+    for key, value in result.arrays.items():
+        if wanted is not None and key not in wanted:
+            continue
+        if rows is not None and not key.startswith("event_") and value.ndim and value.shape[0] == n:
+            value = value[rows]
+        if output.precision == "float32" and value.dtype == np.float64 and is_bulk(key):
+            value = value.astype(np.float32)
+        arrays[key] = value
+    metadata = dict(result.metadata, output={"step": output.step, "keep": output.keep and list(output.keep), "precision": output.precision})
+    return dataclasses.replace(result, arrays=arrays, metadata=metadata)
+
+
+def save_result(result: Result, path: str | Path, output: OutputSpec | None = None) -> Path:
+    """Write the result as one ``.npz`` file, atomically (header as JSON in ``__meta__``).
+
+    ``output``: the scene's ``[output]`` table (:func:`select_records`); ``None`` writes every array as it is.
+    """
+    if output is not None:
+        result = select_records(result, output)
     header = {
         "format_version": FORMAT_VERSION,
         "scene": result.scene,
@@ -319,7 +357,7 @@ def load_result(path: str | Path, *, urdf_text: str | None = None) -> Result:
         raise ResultFileError(f"result file {str(path)!r} has a corrupt header ({exc})") from None
     if header.get("format_version") != FORMAT_VERSION:
         raise ResultFileError(f"result file {str(path)!r} has format version {header.get('format_version')}, expected {FORMAT_VERSION}")
-    for key in ("t", "q", "v", "driving_force", "ee_position"):
+    for key in ALWAYS_KEPT:
         if key not in arrays:
             raise ResultFileError(f"result file {str(path)!r} lacks the array {key!r}")
     metadata = header.get("metadata", {})

@@ -199,6 +199,12 @@ def summary_table(results: dict) -> str:
 
 def parse_args(argv=None) -> argparse.Namespace:
     parser = argparse.ArgumentParser(description="Cross-check the Lagrange model against Newton-Euler and Exudyn.")
+    add_arguments(parser)
+    return parser.parse_args(argv)
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    """The study's options (``clearance validate``, :mod:`robot.cli.validate`)."""
     parser.add_argument("--out", default="results/validation", help="output directory (default results/validation)")
     parser.add_argument("--scenes", nargs="+", default=list(DEFAULT_SCENES), help=f"scenes (default {' '.join(DEFAULT_SCENES)})")
     parser.add_argument("--duration", nargs="*", default=[], metavar="SCENE=T", help="override a scene's duration (s)")
@@ -216,11 +222,13 @@ def parse_args(argv=None) -> argparse.Namespace:
     group.add_argument("--max-step", type=float, default=None, help=f"largest step, s (default {v.max_step:g}; also the largest spacing of the compared records)")
     group.add_argument("--first-step", type=float, default=None, help="first step, s (the step size of fixed-step methods)")
     parser.add_argument("--no-figures", action="store_true", help="write validation.json only")
-    return parser.parse_args(argv)
 
 
 def main(argv=None) -> int:
-    args = parse_args(argv)
+    return run_validation(parse_args(argv))
+
+
+def run_validation(args: argparse.Namespace) -> int:
     durations = dict(DEFAULT_DURATIONS)
     for item in args.duration:
         scene, _, value = item.partition("=")

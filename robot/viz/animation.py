@@ -57,10 +57,10 @@ from clearance_contact import STEEL, ClearanceJoint, ContactError, NoFriction, S
 from robot.io.atomic import atomic_write
 from robot.errors import ResultFileError, RobotError
 from robot.model.mechanism import Mechanism, build_mechanism, rotation_z_to
+from robot.data import shipped_urdf, shipped_urdf_dir
 from robot.io.results import SimulationResult, load_result, mechanism_fingerprint
 
-REPO_ROOT = Path(__file__).resolve().parents[2]
-URDF_DIR = REPO_ROOT / "urdf"
+URDF_DIR = shipped_urdf_dir()
 
 OUTER_COLOR = 0x7FA7D0
 INNER_COLOR = 0xE0A020
@@ -179,9 +179,9 @@ def load_for_animation(
         name = metadata.get("mechanism")
         if not isinstance(name, str) or not name:
             raise ResultFileError(f"{label} does not name its mechanism file (metadata 'mechanism'); pass the URDF explicitly (--urdf)")
-        urdf = URDF_DIR / Path(name).name
+        urdf = shipped_urdf(name)
         recorded = metadata.get("mechanism_path")
-        if not urdf.is_file() and isinstance(recorded, str) and Path(recorded).is_file():
+        if not Path(urdf).is_file() and isinstance(recorded, str) and Path(recorded).is_file():
             urdf = Path(recorded)  # a user's mechanism, where the run found it
     urdf = Path(urdf)
     if not urdf.is_file():
@@ -231,6 +231,8 @@ def _clearance_choice(metadata: Mapping[str, Any], label: str) -> dict[str, str]
 
 def _check_arrays(mechanism: Mechanism, result: SimulationResult, label: str, types: Mapping[str, type[ClearanceJoint]]) -> None:
     arrays = result.arrays
+    if "q" not in arrays:
+        raise ResultFileError(f"{label} was saved without the array 'q' (the scene's [output] keep); rerun keeping \"q\" to animate it")
     t, q = np.asarray(arrays["t"]), np.asarray(arrays["q"])
     n = t.shape[0] if t.ndim == 1 else -1
     if n < 1:
