@@ -9,11 +9,15 @@ in memory and loaded from a file alike.
 back and checks it.
 
 Arrays (n records): ``t``; ``q`` (n x nq), ``v`` (n x nv); ``driving_force``
-(n x n_actuators, N, positive = the actuator pushes); ``ee_position``,
+(n x motion-driven actuators; N on a prismatic joint, N m on a revolute one, positive
+in the direction of increasing coordinate: the actuator pushes); ``ee_position``,
 ``ee_velocity``, ``ee_acceleration`` (n x 3, world, of the end-effector frame
 origin); ``constraint_residual`` (n, max |Phi|); ``kinetic_energy``,
 ``potential_energy``, ``actuator_power``, ``contact_power``, ``actuator_work``,
-``contact_work`` (n; works integrated with the motion); ``record_kind`` (n, what
+``contact_work`` (n; works integrated with the motion: actuators, motion- and
+force-driven, and contact); with force elements (``robot.dynamics.forces``) also
+``force_work`` (n, their integrated work), ``force_energy`` (n, energy stored in them) and per
+element ``force_NAME`` (n, its scalar force, N, or torque, N m); ``record_kind`` (n, what
 each record is, below); ``onset_rates`` (n x candidates, the Lankarani-Nikravesh
 approach rate in use at each record); per clearance joint
 J: ``J_eccentricity`` (n x 3 spherical; n x 2 x 3 revolute, top and bottom ring),
@@ -228,6 +232,10 @@ def compute_outputs(dynamics: D.DynamicsModel, trajectory: Trajectory) -> dict[s
         "actuator_work": y[:, nq + nv],
         "contact_work": y[:, nq + nv + 1],
     }
+    forces = workspace.forces  # force elements: force_work, force_energy (stored), force_<name> (scalar force or torque)
+    if forces is not None:
+        element_scalars, out["force_energy"] = np.empty((n, len(forces.elements))), np.empty(n)
+        out["force_work"] = y[:, nq + nv + 2]  # not the force-driven actuators' work: that is actuator_work
     # per clearance joint: the arrays its type records (clearance_contact.ClearanceJoint.result_arrays)
     per_site = {contact.site.name: contact.law.result_arrays(n) for contact in dynamics.contacts}
     ee = dynamics.end_effector_frame
@@ -239,7 +247,9 @@ def compute_outputs(dynamics: D.DynamicsModel, trajectory: Trajectory) -> dict[s
         force = evaluation.driving_force(dynamics.constraints)
         out["driving_force"][i] = force
         out["constraint_residual"][i] = np.max(np.abs(evaluation.residual)) if evaluation.residual.size else 0.0
-        out["actuator_power"][i] = force @ v[act]
+        out["actuator_power"][i] = force @ v[act] + (0.0 if forces is None else forces.powers[0])
+        if forces is not None:
+            element_scalars[i], out["force_energy"][i] = evaluation.force_scalars, forces.potential_energy(q)
         out["contact_power"][i] = evaluation.generalized_contact_force @ v
         pin.forwardKinematics(model, data, q, v, evaluation.qdd)
         pin.updateFramePlacements(model, data)
@@ -252,6 +262,8 @@ def compute_outputs(dynamics: D.DynamicsModel, trajectory: Trajectory) -> dict[s
     for name, arrays in per_site.items():
         for key, value in arrays.items():
             out[f"{name}_{key}"] = value
+    for k, element in enumerate(() if forces is None else forces.elements):
+        out[f"force_{element.name}"] = element_scalars[:, k]
     return out
 
 

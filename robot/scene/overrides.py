@@ -4,7 +4,8 @@ A key path names a value of the scene's TOML document: ``duration``,
 ``solver.rtol``, ``trajectory.period``, ``materials.steel.youngs_modulus``.
 Entries of the ``[[clearance]]`` array are addressed by their ``joint`` name
 (``clearance.R1.radial_clearance``, ``clearance.S1.friction.dynamic``) or by
-their index (``clearance.0.restitution``). Setting a key that the scene does not
+their index (``clearance.0.restitution``); ``[[force]]`` entries by their ``name``
+(``force.tip_spring.stiffness``). Setting a key that the scene does not
 have yet creates it (the validation that follows rejects keys that do not
 exist in the schema, naming them); a path through a value that is not a table
 is refused here, naming the path.
@@ -22,7 +23,7 @@ from typing import Any, Mapping
 from robot.errors import SceneError
 
 #: arrays of tables whose entries are addressed by this key (or by index)
-ARRAY_ENTRY_KEYS = {"clearance": "joint"}
+ARRAY_ENTRY_KEYS = {"clearance": "joint", "force": "name"}
 
 
 def _array_entry(entries: list, name: str, path: str, array: str) -> dict:
