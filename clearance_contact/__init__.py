@@ -10,6 +10,8 @@ as plain Python.
 * :mod:`.errors`: ``ContactError``, ``ContactParameterError``;
 * :mod:`.materials`: ``Material`` and Hertz-type stiffnesses;
 * :mod:`.normal_force`: Lankarani-Nikravesh law, ``ONSET_RATE_FLOOR``, Hertz impact peak;
+* :mod:`.dissipation`: normal dissipation models (L-N, Hunt-Crossley, Gonthier, Flores, Hu-Guo);
+* :mod:`.radial_laws`, :mod:`.radial_profile`: the revolute joint's radial laws and exact-profile wrench;
 * :mod:`.friction`: Brown-McPhee, Coulomb, no friction;
 * :mod:`.result`: ``JointContact``;
 * :mod:`.joint`: ``ClearanceJoint`` (base class of the joint types), ``Shape``, ``output_layout``;
@@ -37,6 +39,8 @@ from .normal_force import (
     lankarani_nikravesh,
     validate_normal_law,
 )
+from .dissipation import DISSIPATION_MODELS, rebound_ratio
+from .radial_laws import RADIAL_LAWS
 from .result import KIND_LINE, KIND_NONE, KIND_PLANE, KIND_POINT, JointContact
 from .joint import ClearanceJoint, Shape, output_layout
 from .registry import joint_type, joint_types, register_joint_type
@@ -77,4 +81,7 @@ __all__ = [
     "joint_types",
     "SphericalClearanceJoint",
     "RevoluteClearanceJoint",
+    "DISSIPATION_MODELS",
+    "RADIAL_LAWS",
+    "rebound_ratio",
 ]

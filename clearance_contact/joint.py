@@ -128,7 +128,9 @@ class ClearanceJoint:
     ``N_CANDIDATES`` (k), ``N_ECCENTRICITY`` (r), ``EXTRA_OUTPUTS``: its output layout.
     ``SITE_KINDS``: the kinds of mechanism joint it can replace (``"spherical"``,
     ``"revolute"``; a revolute tree joint becomes a free joint, so any type fits it).
-    ``SCENE_KEYS``: its own scene keys (numbers), ``REQUIRED_KEYS`` the ones without default.
+    ``SCENE_KEYS``: its own scene keys, ``REQUIRED_KEYS`` the ones without default;
+    ``NAME_KEYS``: those of them whose values are names (text: a model chosen from a
+    registry, e.g. ``dissipation``), the others are numbers.
     ``GEOMETRY_KEYS``: the keys that size its elements (result metadata, animation);
     ``GAP_KEYS``: the clearances among them (magnified in an animation);
     ``DEFAULT_GEOMETRY``: sizes drawn when a result does not record them.
@@ -151,6 +153,7 @@ class ClearanceJoint:
     SITE_KINDS: ClassVar[tuple[str, ...]] = ("spherical", "revolute")
     SCENE_KEYS: ClassVar[tuple[str, ...]] = ()
     REQUIRED_KEYS: ClassVar[tuple[str, ...]] = ()
+    NAME_KEYS: ClassVar[tuple[str, ...]] = ()
     GEOMETRY_KEYS: ClassVar[tuple[str, ...]] = ()
     GAP_KEYS: ClassVar[tuple[str, ...]] = ()
     DEFAULT_GEOMETRY: ClassVar[Mapping[str, float]] = {}
@@ -219,11 +222,17 @@ class ClearanceJoint:
         return getattr(self, "_given", _NOTHING_GIVEN)
 
     @property
-    def scene_parameters(self) -> dict[str, float]:
-        """Every scene key of the type that has a value: as given, or the law's own value."""
+    def scene_parameters(self) -> dict[str, float | str]:
+        """Every scene key of the type that has a value: as given, or the law's own value.
+
+        A name key (``NAME_KEYS``) reports the name: its attribute is either the name or
+        the registry's object, which carries it as ``name``.
+        """
         out = {}
         for key in self.SCENE_KEYS:
             value = self._given_parameters().get(key, getattr(self, key, None))
+            if key in self.NAME_KEYS and value is not None and not isinstance(value, str):
+                value = value.name
             if value is not None:
                 out[key] = value
         return out

@@ -47,11 +47,11 @@ def register_joint_type(cls: type[ClearanceJoint]) -> type[ClearanceJoint]:
     if cls.kernel_function is None or cls.penetration_kernel is None:
         raise ContactParameterError(f"{cls.__name__} must define kernel and penetration_kernel")
     clash = sorted(COMMON_SCENE_KEYS & set(cls.SCENE_KEYS))
-    missing = sorted(set(cls.REQUIRED_KEYS + cls.GEOMETRY_KEYS) - set(cls.SCENE_KEYS))
+    missing = sorted(set(cls.REQUIRED_KEYS + cls.GEOMETRY_KEYS + cls.NAME_KEYS) - set(cls.SCENE_KEYS))
     if clash or missing:
         raise ContactParameterError(
             f"{cls.__name__}: SCENE_KEYS must not repeat the common keys ({', '.join(clash) or 'none'}) and must "
-            f"contain REQUIRED_KEYS and GEOMETRY_KEYS (missing: {', '.join(missing) or 'none'})"
+            f"contain REQUIRED_KEYS, GEOMETRY_KEYS and NAME_KEYS (missing: {', '.join(missing) or 'none'})"
         )
     held = _TYPES.get(name)
     if held is not None and (held.__module__, held.__qualname__) != (cls.__module__, cls.__qualname__):

@@ -65,10 +65,12 @@ Schema (defaults in brackets)::
     material = "steel" # or outer_material / inner_material
     restitution = 0.9
     friction = {law = "brown_mcphee", static = 0.07, dynamic = 0.05, transition_velocity = 5e-3}
-    # the type's own keys (its SCENE_KEYS, numbers):
-    # spherical: ball_radius, clearance, exponent [1.5], stiffness [Hertz]
+    # the type's own keys (its SCENE_KEYS: numbers, and names for its NAME_KEYS):
+    # spherical: ball_radius, clearance, exponent [1.5], stiffness [Hertz], dissipation
     # revolute: journal_radius, radial_clearance, bearing_outer_radius, bearing_length,
-    #           axial_clearance, radial_exponent, axial_exponent, point_exponent, *_stiffness
+    #           axial_clearance, radial_exponent, axial_exponent, point_exponent, *_stiffness,
+    #           radial_law ["linear"; or "johnson", "pereira", "hertz_point"], dissipation
+    # both: dissipation ["lankarani_nikravesh"; or "hunt_crossley", "gonthier", "flores", "hu_guo"]
 
     [initial]
     misalignment_deg = { R1 = -0.035 }   # revolute clearance joints: bearing rotated about its
@@ -302,6 +304,14 @@ def _number(table: dict, key: str, where: str, default=None, *, low=-math.inf, h
     return float(value)
 
 
+def _name(table: dict, key: str, where: str) -> str:
+    """The text value of ``key`` (a model's name: whether it is a known one is for its registry to say)."""
+    value = table[key]
+    if not isinstance(value, str) or not value:
+        raise SceneError(f"{where}: {key}={value!r} must be a name (a non-empty string)", key=key, value=value)
+    return value
+
+
 def _table(data: dict, key: str, where: str) -> dict:
     value = data.get(key, {})
     if not isinstance(value, dict):
@@ -373,10 +383,16 @@ def _clearance(table: Any, index: int, materials: dict[str, Material], where: st
     outer, inner = material("outer_material"), material("inner_material")
     restitution = _number(table, "restitution", w, 0.9)
     for key in law_type.REQUIRED_KEYS:
-        _number(table, key, w, required=True)
-    # dimensions (the type's GEOMETRY_KEYS) are positive: checked here, under the user's key names
+        if key not in table:
+            raise SceneError(f"{w}: missing required key {key!r}", key=key)
+    # dimensions (the type's GEOMETRY_KEYS) are positive: checked here, under the user's key names;
+    # NAME_KEYS are names of models (the joint checks a name against its registry)
     positive = {"low": 0.0, "low_open": True}
-    parameters = {key: _number(table, key, w, **(positive if key in law_type.GEOMETRY_KEYS else {})) for key in law_type.SCENE_KEYS if key in table}
+    parameters = {
+        key: _name(table, key, w) if key in law_type.NAME_KEYS else _number(table, key, w, **(positive if key in law_type.GEOMETRY_KEYS else {}))
+        for key in law_type.SCENE_KEYS
+        if key in table
+    }
     try:
         friction = _friction(table.get("friction"), f"{w} friction")
         law = law_type.from_scene(parameters, outer, inner, restitution, friction)

@@ -120,7 +120,7 @@ class ElementSizes:
     kind: str
     values: dict[str, float]
     source: str = "default"
-    parameters: dict[str, float] = field(default_factory=dict)
+    parameters: dict[str, float | str] = field(default_factory=dict)
 
     @property
     def joint_type(self) -> type[ClearanceJoint]:
@@ -290,7 +290,11 @@ def clearance_sizes(mechanism: Mechanism, result: SimulationResult) -> tuple[dic
                 notes.append(f"{site.name}: {key} {value:.4g} m taken from the result data (source said {values[key]:.4g} m)")
                 values[key] = value
                 origin = f"{origin}; {key} from result data"
-        parameters = {key: float(value) for key, value in recorded.get(site.name, {}).items() if key in law_type.SCENE_KEYS and key not in values}
+        parameters = {
+            key: value if key in law_type.NAME_KEYS else float(value)  # names of models stay text
+            for key, value in recorded.get(site.name, {}).items()
+            if key in law_type.SCENE_KEYS and key not in values
+        }
         sizes[site.name] = ElementSizes(law_type.type_name, values, source=origin, parameters=parameters)
     return sizes, notes
 
