@@ -15,7 +15,8 @@ as plain Python.
 * :mod:`.joint`: ``ClearanceJoint`` (base class of the joint types), ``Shape``, ``output_layout``;
 * :mod:`.registry`: ``register_joint_type``, ``joint_type``, ``joint_types``;
 * :mod:`.spherical`: ``SphericalClearanceJoint``;
-* :mod:`.revolute`: ``RevoluteClearanceJoint``.
+* :mod:`.revolute`: ``RevoluteClearanceJoint``;
+* :mod:`.translational`: ``TranslationalClearanceJoint``, ``PlanarTranslationalClearanceJoint``.
 """
 
 from .errors import ContactError, ContactParameterError
@@ -27,6 +28,7 @@ from .materials import (
     cylinder_line_stiffness,
     flat_punch_stiffness,
     hertz_sphere_stiffness,
+    sphere_plane_stiffness,
 )
 from .normal_force import (
     EXPONENT_RANGE,
@@ -42,6 +44,7 @@ from .joint import ClearanceJoint, Shape, output_layout
 from .registry import joint_type, joint_types, register_joint_type
 from .spherical import SphericalClearanceJoint
 from .revolute import RevoluteClearanceJoint
+from .translational import PlanarTranslationalClearanceJoint, TranslationalClearanceJoint
 
 __all__ = [
     "ContactError",
@@ -77,4 +80,7 @@ __all__ = [
     "joint_types",
     "SphericalClearanceJoint",
     "RevoluteClearanceJoint",
+    "TranslationalClearanceJoint",
+    "PlanarTranslationalClearanceJoint",
+    "sphere_plane_stiffness",
 ]
