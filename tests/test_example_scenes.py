@@ -120,7 +120,7 @@ def test_translational_impacts_with_restitution_one_and_no_friction_keep_the_ene
     work = result["contact_work"]
     peak = np.abs(work).max()
     assert peak > 0
-    assert np.abs(work[after]).max() < 1e-4 * peak
+    assert np.abs(work[after]).max() < 1e-6 * peak  # measured 2e-8 (rtol 1e-9)
     balance = result["kinetic_energy"] + result["potential_energy"] - result["actuator_work"]
     scale = np.abs(result["actuator_work"]).max() + result["kinetic_energy"].max()
-    assert np.abs(balance[after] - balance[0]).max() < 1e-5 * scale
+    assert np.abs(balance[after] - balance[0]).max() < 1e-9 * scale  # measured 1.6e-11

@@ -12,6 +12,7 @@ differences) and bad parameters named by key.
 from __future__ import annotations
 
 import math
+from pathlib import Path
 
 import numpy as np
 import pinocchio as pin
@@ -356,3 +357,75 @@ def test_bad_parameters_name_the_key(kwargs, key):
     arguments.update(kwargs)
     with pytest.raises(ContactParameterError, match=key):
         TranslationalClearanceJoint(**arguments)
+
+
+# --------------------------------------------------------------------------- prismatic sites
+
+
+def test_a_prismatic_tree_joint_becomes_a_free_joint_with_guide_aligned_element_frames():
+    from robot.data import shipped_urdf
+    from robot.model.mechanism import build_mechanism
+
+    ideal = build_mechanism(shipped_urdf("slider_crank.urdf"))
+    mechanism = build_mechanism(shipped_urdf("slider_crank.urdf"), {"slider": "parent"})
+    assert mechanism.model.nv == ideal.model.nv + 5
+    (site,) = mechanism.clearance_sites
+    assert site.kind == "prismatic" and site.replaces == "joint"
+    data = mechanism.model.createData()
+    pin.framesForwardKinematics(mechanism.model, data, pin.neutral(mechanism.model))
+    guide = data.oMf[site.outer_frame]
+    np.testing.assert_allclose(guide.rotation[:, 2], [1, 0, 0], atol=1e-15)  # guide axis = the joint axis (world x)
+    np.testing.assert_allclose(guide.rotation[:, 0], [0, 1, 0], atol=1e-15)  # width direction in the plane
+    with pytest.raises(Exception, match="actuated"):
+        build_mechanism(shipped_urdf("slider_crank.urdf"), {"crank": "child"})
+
+
+def test_prismatic_centring_rows_jacobian_and_gamma_by_finite_differences():
+    """Phi_q v = d/dt Phi and gamma = -d2/dt2 Phi along q(t) = integrate(q, t v) (zero joint acceleration)."""
+    from robot.data import shipped_urdf
+    from robot.model import constraints as C
+    from robot.model.mechanism import build_mechanism
+
+    mechanism = build_mechanism(shipped_urdf("slider_crank.urdf"), {"slider": "parent"})
+    model = mechanism.model
+    constraints = C.constraint_set(mechanism, driven=False, centre_clearance=True)
+    assert constraints.row_labels[-5:] == ("slider:x", "slider:y", "slider:rot_x", "slider:rot_y", "slider:rot_z")
+    rng = np.random.default_rng(8)
+    q = pin.randomConfiguration(model, -np.ones(model.nq), np.ones(model.nq))
+    v = rng.normal(size=model.nv)
+    data = model.createData()
+
+    def phi(t):
+        pin.framesForwardKinematics(model, data, pin.integrate(model, q, t * v))
+        return C.residual(constraints, data, q, None)
+
+    pin.computeJointJacobians(model, data, q)
+    pin.updateFramePlacements(model, data)
+    jacobian = C.jacobian(constraints, model, data)
+    pin.forwardKinematics(model, data, q, v, np.zeros(model.nv))
+    pin.updateFramePlacements(model, data)
+    gamma = C.gamma(constraints, model, data, None)
+    h = 1e-4
+    rows = slice(-5, None)
+    np.testing.assert_allclose((jacobian @ v)[rows], ((phi(h) - phi(-h)) / (2 * h))[rows], atol=1e-7)
+    np.testing.assert_allclose(gamma[rows], (-(phi(h) - 2 * phi(0.0) + phi(-h)) / h**2)[rows], atol=1e-5, rtol=1e-5)
+    assert np.abs(phi(0.0)[rows]).min() > 1e-3  # a generic pose: the rows are not trivially zero
+
+
+def test_scene_type_must_fit_the_joint_and_bad_keys_are_named(tmp_path):
+    from robot.errors import SceneError
+    from robot.scene.loader import load_scene
+
+    text = (Path(__file__).resolve().parents[1] / "robot" / "scene" / "scenes" / "slider_crank_translational.toml").read_text()
+    (tmp_path / "revolute_site.toml").write_text(text.replace('joint = "slider"', 'joint = "crank_rod"'))
+    with pytest.raises(SceneError, match=r"type='translational' cannot replace 'crank_rod', a revolute joint .* use type = 'revolute'"):
+        load_scene(tmp_path / "revolute_site.toml")
+    (tmp_path / "wrong_type.toml").write_text(text.replace('type = "translational"', 'type = "revolute"'))
+    with pytest.raises(SceneError, match="unknown key"):
+        load_scene(tmp_path / "wrong_type.toml")
+    (tmp_path / "zero_gap.toml").write_text(text.replace("width_clearance = 2.0e-4", "width_clearance = 0.0"))
+    with pytest.raises(SceneError, match="width_clearance"):
+        load_scene(tmp_path / "zero_gap.toml")
+    (tmp_path / "both.toml").write_text(text.replace("corner_radius = 1.0e-3", "corner_radius = 1.0e-3\nstiffness = 1e9"))
+    with pytest.raises(SceneError, match="stiffness"):
+        load_scene(tmp_path / "both.toml")
