@@ -418,7 +418,7 @@ def test_scene_type_must_fit_the_joint_and_bad_keys_are_named(tmp_path):
 
     text = (Path(__file__).resolve().parents[1] / "robot" / "scene" / "scenes" / "slider_crank_translational.toml").read_text()
     (tmp_path / "revolute_site.toml").write_text(text.replace('joint = "slider"', 'joint = "crank_rod"'))
-    with pytest.raises(SceneError, match=r"type='translational' cannot replace 'crank_rod', a revolute joint .* use type = 'revolute'"):
+    with pytest.raises(SceneError, match=r"type='translational' cannot replace 'crank_rod', a revolute joint .* use type = .*'revolute'"):
         load_scene(tmp_path / "revolute_site.toml")
     (tmp_path / "wrong_type.toml").write_text(text.replace('type = "translational"', 'type = "revolute"'))
     with pytest.raises(SceneError, match="unknown key"):
