@@ -17,7 +17,8 @@ as plain Python.
 * :mod:`.joint`: ``ClearanceJoint`` (base class of the joint types), ``Shape``, ``output_layout``;
 * :mod:`.registry`: ``register_joint_type``, ``joint_type``, ``joint_types``;
 * :mod:`.spherical`: ``SphericalClearanceJoint``;
-* :mod:`.revolute`: ``RevoluteClearanceJoint``.
+* :mod:`.revolute`: ``RevoluteClearanceJoint``;
+* :mod:`.translational`: ``TranslationalClearanceJoint``, ``PlanarTranslationalClearanceJoint``.
 
 The names are imported lazily (on first use): ``import clearance_contact.errors``
 (what the ``robot`` package's exceptions need) loads neither numba nor the laws,
@@ -42,6 +43,7 @@ _PUBLIC = {
     "cylinder_line_stiffness": ".materials",
     "flat_punch_stiffness": ".materials",
     "hertz_sphere_stiffness": ".materials",
+    "sphere_plane_stiffness": ".materials",
     "EXPONENT_RANGE": ".normal_force",
     "ONSET_RATE_FLOOR": ".normal_force",
     "HertzImpactMaximum": ".normal_force",
@@ -65,6 +67,8 @@ _PUBLIC = {
     "register_joint_type": ".registry",
     "SphericalClearanceJoint": ".spherical",
     "RevoluteClearanceJoint": ".revolute",
+    "TranslationalClearanceJoint": ".translational",
+    "PlanarTranslationalClearanceJoint": ".translational",
 }
 
 __all__ = sorted(_PUBLIC)
