@@ -25,7 +25,7 @@ The names are imported lazily (on first use): ``import clearance_contact.errors`
 and the shipped joint types register on the registry's first look-up.
 """
 
-from importlib import import_module
+from .lazy import lazy_exports
 
 #: public name -> the submodule that defines it
 _PUBLIC = {
@@ -74,13 +74,4 @@ _PUBLIC = {
 __all__ = sorted(_PUBLIC)
 
 
-def __getattr__(name: str):
-    if name in _PUBLIC:
-        value = getattr(import_module(_PUBLIC[name], __name__), name)
-        globals()[name] = value
-        return value
-    raise AttributeError(f"module 'clearance_contact' has no attribute {name!r}")
-
-
-def __dir__() -> list[str]:
-    return sorted(set(globals()) | set(_PUBLIC))
+__getattr__, __dir__ = lazy_exports(__name__, globals(), _PUBLIC)

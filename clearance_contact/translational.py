@@ -68,9 +68,10 @@ the guide's y axis (in the plane of motion): the two diagonally opposite corners
 
 Forces (per candidate; Flores et al. 2008)
 ------------------------------------------
-Normal force: Lankarani-Nikravesh (Lankarani & Nikravesh, J. Mech. Des. 112 (1990)
-369; seed paper eq. (11)) through :func:`corner_normal_force` (the one place to
-switch it to another dissipation law)::
+Normal force: K delta^n times the joint's dissipation factor (scene key
+``dissipation``, :mod:`~clearance_contact.dissipation`), clamped at >= 0, through
+:func:`corner_normal_force`; by default Lankarani-Nikravesh (Lankarani & Nikravesh,
+J. Mech. Des. 112 (1990) 369; seed paper eq. (11))::
 
     F_N = K delta^n [1 + 3 (1 - c_e^2)/4 delta_dot / delta_dot0]   (delta > 0)
 
@@ -99,8 +100,8 @@ Kernel (``docs/contact-api.md``)
 (``KERNEL_ID = None``: the simulator calls :meth:`ClearanceJoint.evaluate`).
 ``kernel_parameters`` (float64)::
 
-    [K, n, c_e, friction code, 5 friction parameters, h_x, h_y, L_s/2, k,
-     k rows (s_x, s_y, s_z, axis j, side sigma)]
+    [K, n, c_e, friction code, 5 friction parameters, dissipation code, 2 parameters,
+     h_x, h_y, L_s/2, k, k rows (s_x, s_y, s_z, axis j, side sigma)]
 
 Status: 0 ok, ``STATUS_NONFINITE_INPUT``, ``STATUS_NONFINITE_PENETRATION``, or
 ``STATUS_EXTERNAL_FRICTION`` for a user-defined friction law (every call): then
@@ -129,7 +130,8 @@ from .errors import ContactParameterError, require_positive
 from .friction import FRICTION_EXTERNAL, FRICTION_NONE, FRICTION_PARAMETERS, FrictionLaw, NoFriction, encoded_force_over_speed
 from .joint import ClearanceJoint, Shape, output_layout
 from .materials import Material, require_material, sphere_plane_stiffness
-from .normal_force import lankarani_nikravesh, validate_normal_law
+from .dissipation import DEFAULT_DISSIPATION, DISSIPATION_PARAMETERS, dissipation_encoding, encoded_damping_factor
+from .normal_force import validate_normal_law
 from .registry import register_joint_type
 from .result import KIND_NONE, KIND_POINT
 
@@ -147,7 +149,8 @@ _P_STIFFNESS = 0
 _P_EXPONENT = 1
 _P_RESTITUTION = 2
 _P_FRICTION = 3  # kind code, then FRICTION_PARAMETERS values
-_P_HALF_WIDTH = _P_FRICTION + 1 + FRICTION_PARAMETERS  # h_x
+_P_DISSIPATION = _P_FRICTION + 1 + FRICTION_PARAMETERS  # dissipation code, then DISSIPATION_PARAMETERS values
+_P_HALF_WIDTH = _P_DISSIPATION + 1 + DISSIPATION_PARAMETERS  # h_x
 _P_HALF_HEIGHT = _P_HALF_WIDTH + 1  # h_y
 _P_HALF_LENGTH = _P_HALF_WIDTH + 2  # L_s / 2
 _P_COUNT = _P_HALF_WIDTH + 3  # k
@@ -181,14 +184,18 @@ def _offsets(k):
 
 @jit
 def corner_normal_force(parameters, penetration, penetration_rate, onset_rate):
-    """Normal force (N) of one corner: Lankarani-Nikravesh with the joint's K, n, c_e (module docstring).
+    """Normal force (N) of one corner: K delta^n times the joint's dissipation factor, clamped at >= 0.
 
-    The one place where the type's normal law is chosen (to be switched to a
-    dissipation-law registry): :func:`~clearance_contact.normal_force.lankarani_nikravesh`.
+    The one place where the type's normal law is applied: the dissipation model is the
+    joint's (:mod:`~clearance_contact.dissipation`, code and parameters packed in
+    ``kernel_parameters``; Lankarani-Nikravesh by default).
     """
-    return lankarani_nikravesh(
-        penetration, penetration_rate, onset_rate, parameters[_P_STIFFNESS], parameters[_P_EXPONENT], parameters[_P_RESTITUTION]
+    if penetration <= 0.0:
+        return 0.0
+    force = parameters[_P_STIFFNESS] * penetration ** parameters[_P_EXPONENT] * encoded_damping_factor(
+        parameters, _P_DISSIPATION, penetration_rate, onset_rate
     )
+    return force if force > 0.0 else 0.0
 
 
 @jit
@@ -398,7 +405,7 @@ def corner_table(half_length: float, half_width: float, half_height: float, plan
 class _SliderInGuide(ClearanceJoint):
     """What the spatial and planar translational joints share (not a registered type itself)."""
 
-    __slots__ = ("_length", "_width", "_height", "_guide_width", "_guide_height", "_slider_material", "_guide_material", "_exponent", "_stiffness", "_corner_radius")
+    __slots__ = ("_length", "_width", "_height", "_guide_width", "_guide_height", "_slider_material", "_guide_material", "_exponent", "_stiffness", "_corner_radius", "_dissipation")
 
     N_ECCENTRICITY = _N_ECCENTRICITY
     SITE_KINDS = ("prismatic",)
@@ -418,6 +425,7 @@ class _SliderInGuide(ClearanceJoint):
         friction: FrictionLaw,
         stiffness: float | None,
         corner_radius: float | None,
+        dissipation: str = DEFAULT_DISSIPATION,
     ) -> None:
         length = require_positive("slider_length", length)
         width = require_positive("slider_width", width)
@@ -450,7 +458,9 @@ class _SliderInGuide(ClearanceJoint):
         parameters[_P_EXPONENT] = n
         parameters[_P_RESTITUTION] = ce
         parameters[_P_FRICTION] = code
-        parameters[_P_FRICTION + 1 : _P_HALF_WIDTH] = friction_parameters
+        parameters[_P_FRICTION + 1 : _P_DISSIPATION] = friction_parameters
+        parameters[_P_DISSIPATION:_P_HALF_WIDTH] = dissipation_encoding(dissipation, ce)
+        self._dissipation = dissipation
         parameters[_P_HALF_WIDTH] = 0.5 * guide_width
         parameters[_P_HALF_HEIGHT] = 0.5 * guide_height
         parameters[_P_HALF_LENGTH] = 0.5 * length
@@ -510,6 +520,11 @@ class _SliderInGuide(ClearanceJoint):
     @property
     def corner_radius(self) -> float | None:
         return self._corner_radius
+
+    @property
+    def dissipation(self) -> str:
+        """Name of the normal dissipation model (:mod:`~clearance_contact.dissipation`)."""
+        return self._dissipation
 
     @property
     def slider_material(self) -> Material:
@@ -578,7 +593,8 @@ class TranslationalClearanceJoint(_SliderInGuide):
 
     type_name = "translational"
     N_CANDIDATES = 16
-    SCENE_KEYS = ("slider_length", "slider_width", "slider_height", "width_clearance", "height_clearance", "corner_radius", "stiffness", "exponent")
+    SCENE_KEYS = ("slider_length", "slider_width", "slider_height", "width_clearance", "height_clearance", "corner_radius", "stiffness", "exponent", "dissipation")
+    NAME_KEYS = ("dissipation",)
     REQUIRED_KEYS = ("slider_length", "slider_width", "slider_height", "width_clearance", "height_clearance")
     GEOMETRY_KEYS = REQUIRED_KEYS
     GAP_KEYS = ("width_clearance", "height_clearance")
@@ -601,10 +617,11 @@ class TranslationalClearanceJoint(_SliderInGuide):
         friction: FrictionLaw = NoFriction(),
         stiffness: float | None = None,
         corner_radius: float | None = None,
+        dissipation: str = DEFAULT_DISSIPATION,
     ) -> None:
         self._build(
             slider_length, slider_width, slider_height, guide_width, guide_height, slider_material, guide_material,
-            restitution, exponent, friction, stiffness, corner_radius,
+            restitution, exponent, friction, stiffness, corner_radius, dissipation,
         )  # fmt: skip
 
     @classmethod
@@ -670,7 +687,8 @@ class PlanarTranslationalClearanceJoint(_SliderInGuide):
     type_name = "planar_translational"
     N_CANDIDATES = 4
     PLANAR = True
-    SCENE_KEYS = ("slider_length", "slider_width", "width_clearance", "corner_radius", "stiffness", "exponent")
+    SCENE_KEYS = ("slider_length", "slider_width", "width_clearance", "corner_radius", "stiffness", "exponent", "dissipation")
+    NAME_KEYS = ("dissipation",)
     REQUIRED_KEYS = ("slider_length", "slider_width", "width_clearance")
     GEOMETRY_KEYS = REQUIRED_KEYS
     GAP_KEYS = ("width_clearance",)
@@ -691,10 +709,11 @@ class PlanarTranslationalClearanceJoint(_SliderInGuide):
         friction: FrictionLaw = NoFriction(),
         stiffness: float | None = None,
         corner_radius: float | None = None,
+        dissipation: str = DEFAULT_DISSIPATION,
     ) -> None:
         self._build(
             slider_length, slider_width, 0.0, guide_width, 0.0, slider_material, guide_material,
-            restitution, exponent, friction, stiffness, corner_radius,
+            restitution, exponent, friction, stiffness, corner_radius, dissipation,
         )  # fmt: skip
 
     @classmethod

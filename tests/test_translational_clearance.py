@@ -30,7 +30,7 @@ from clearance_contact import (
     joint_type,
     output_layout,
 )
-from clearance_contact.translational import _offsets
+from clearance_contact.translational import _P_TABLE, _offsets
 
 STEEL = Material(2.07e11, 0.3)
 BRONZE = Material(1.1e11, 0.34)
@@ -97,7 +97,7 @@ def test_offset_beyond_the_clearance_penetrates_the_corners_on_that_face_by_offs
     guide = random_pose(rng)
     e = 2e-4 + 7e-6
     contact = evaluate(law, guide, relative(guide, np.eye(3), np.array([e, 0.0, 0.011])))
-    table = law.kernel_parameters[13:].reshape(-1, 5)
+    table = law.kernel_parameters[_P_TABLE:].reshape(-1, 5)
     width_face = table[:, 3] == 0
     plus = width_face & (table[:, 4] > 0)
     np.testing.assert_allclose(contact.penetration[plus], e - 2e-4, rtol=1e-7)
@@ -119,7 +119,7 @@ def test_in_plane_tilt_penetrates_two_diagonally_opposite_corners_by_the_exact_v
             guide = (rot("z", 0.4) @ rot("x", -1.1), np.array([0.2, -0.1, 0.5]))
             contact = evaluate(law, guide, relative(guide, rot("y", theta), np.array([0.0, 0.0, -0.03])))
             expected = half * math.sin(theta) + a * math.cos(theta) - (a + c_x)
-            table = law.kernel_parameters[13:].reshape(-1, 5)
+            table = law.kernel_parameters[_P_TABLE:].reshape(-1, 5)
             diagonal = (table[:, 3] == 0) & (np.sign(table[:, 0]) == np.sign(table[:, 2]))
             np.testing.assert_allclose(contact.penetration[diagonal], expected, atol=1e-16)
             other = (table[:, 3] == 0) & ~diagonal
@@ -137,7 +137,7 @@ def test_out_of_plane_tilt_and_offset_reach_the_height_faces():
     phi = 0.02
     guide = (np.eye(3), np.zeros(3))
     contact = evaluate(law, guide, relative(guide, rot("x", -phi), np.array([0.0, 1e-5, 0.0])))
-    table = law.kernel_parameters[13:].reshape(-1, 5)
+    table = law.kernel_parameters[_P_TABLE:].reshape(-1, 5)
     top_front = (table[:, 3] == 1) & (table[:, 1] > 0) & (table[:, 2] > 0)
     expected = length / 2 * math.sin(phi) + height / 2 * math.cos(phi) + 1e-5 - (height / 2 + c_y)
     np.testing.assert_allclose(contact.penetration[top_front], expected, atol=1e-16)
@@ -429,3 +429,20 @@ def test_scene_type_must_fit_the_joint_and_bad_keys_are_named(tmp_path):
     (tmp_path / "both.toml").write_text(text.replace("corner_radius = 1.0e-3", "corner_radius = 1.0e-3\nstiffness = 1e9"))
     with pytest.raises(SceneError, match="stiffness"):
         load_scene(tmp_path / "both.toml")
+
+
+@pytest.mark.parametrize("model", ["lankarani_nikravesh", "hunt_crossley", "gonthier", "flores", "hu_guo"])
+def test_corner_force_follows_the_chosen_dissipation_model(model):
+    """A compressing corner: F_N = K delta^n (1 + chi(c_e) delta_dot / delta_dot0) with the model's chi."""
+    from clearance_contact.dissipation import dissipation_factor
+
+    law = planar(stiffness=2.0e9, corner_radius=None, exponent=1.5, restitution=0.6, dissipation=model)
+    guide = (np.eye(3), np.zeros(3))
+    e = 2e-4 + 5e-6  # 5 um into the +x width face
+    speed = 0.03  # m/s towards the face
+    contact = evaluate(law, guide, relative(guide, np.eye(3), np.array([e, 0.0, 0.0])), slider_twist=np.array([speed, 0, 0, 0, 0, 0]), onset=np.full(4, 0.1))
+    touching = contact.penetration > 0.0
+    assert touching.sum() == 2 and law.dissipation == model
+    delta = contact.penetration[touching]
+    expected = 2.0e9 * delta**1.5 * (1.0 + dissipation_factor(model, 0.6) * speed / 0.1)
+    np.testing.assert_allclose(contact.normal_force[touching], expected, rtol=1e-12)
