@@ -37,6 +37,7 @@ __all__ = [
     "EXPONENT_RANGE",
     "lankarani_nikravesh",
     "hysteresis_factor",
+    "hysteresis_damping_factor",
     "validate_normal_law",
     "HertzImpactMaximum",
     "hertz_impact_maximum",
@@ -92,9 +93,19 @@ def lankarani_nikravesh(
     """
     if penetration <= 0.0:
         return 0.0
-    rate0 = onset_rate if onset_rate > ONSET_RATE_FLOOR else ONSET_RATE_FLOOR
-    force = stiffness * penetration**exponent * (1.0 + hysteresis_factor(restitution) * penetration_rate / rate0)
+    force = stiffness * penetration**exponent * hysteresis_damping_factor(
+        penetration_rate, onset_rate, hysteresis_factor(restitution)
+    )
     return force if force > 0.0 else 0.0
+
+
+@jit
+def hysteresis_damping_factor(penetration_rate: float, onset_rate: float, chi: float) -> float:
+    """1 + chi delta_dot / max(delta_dot0, ONSET_RATE_FLOOR): the Hunt-Crossley-form factor on the
+    elastic force, not clamped (every model of :mod:`~clearance_contact.dissipation`; L-N: chi
+    = :func:`hysteresis_factor`).  The one implementation of the damping term and its floor."""
+    rate0 = onset_rate if onset_rate > ONSET_RATE_FLOOR else ONSET_RATE_FLOOR
+    return 1.0 + chi * penetration_rate / rate0
 
 
 class HertzImpactMaximum(NamedTuple):

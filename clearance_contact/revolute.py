@@ -89,20 +89,26 @@ region* (a Winkler-type elastic foundation, Johnson, Contact Mechanics 1985, Ch.
 same idea as the slicing technique for misaligned roller contacts, Harris & Kotzalas,
 Rolling Bearing Analysis, 5th ed. 2007), so that one formula covers every configuration:
 
-* **Radial**, per ring: over its half of the bearing length (s = |z| from 0 to
-  l = L_b/2) the penetration is taken linear between the exact values at the two ends
-  of the half, a = delta(0) and b = delta(+-l), and the line law is applied per unit
-  length, p(s) = (K_line / L_b) max(delta(s), 0)^n_r.  Integrated in closed form:
-  aligned (a = b) it gives exactly K_line/2 delta^n_r per ring, i.e. K_line delta^n_r
-  for the whole bearing (paper eq. (12), line contact); tilted, the contact shrinks
-  continuously to the ring's edge (edge / point contact).  The resultant acts at the
-  centroid s_c of p(s), along the eccentricity direction of that slice (projected
-  normal to the journal axis).  Error of the linear profile: none for a tilt in the
-  plane of the eccentricity (the common rocking case: |e(z)| is then linear); for a
-  sideways (skew) tilt t_perp the chord over-estimates the convex slice penetration by
-  at most (l t_perp)^2 / (8 |e|) (1e-7 m for l = 10 mm, t_perp = 1e-3, |e| = c_r =
-  0.1 mm), while both end values, hence the reported deepest penetration, keep the
-  slice accuracy above.
+* **Radial**, per ring (its half of the bearing length, z in [0, l] or [-l, 0],
+  l = L_b/2): the radial law's force per unit length q(delta) (:mod:`.radial_laws`;
+  default K_line / L_b delta^n_r) is applied to the *exact* slice penetration delta(z)
+  above, and the wrench is minus the gradient of the elastic energy
+  U = int Phi(delta(z)) dz (Phi' = q) with respect to the journal pose, by a fixed
+  Gauss-Legendre quadrature over the wetted part of the half
+  (:mod:`~clearance_contact.radial_profile`: maths, split points, error bound;
+  < 1e-6 relative, exact for aligned axes and for a tilt in the plane of the
+  eccentricity with n = 1).  Aligned it gives exactly K_line/2 delta^n_r per ring, i.e.
+  K_line delta^n_r for the whole bearing (paper eq. (12), line contact); tilted, the
+  contact shrinks continuously to the ring's edge (edge / point contact); under a skew
+  tilt the curved profile is integrated as it is (a linear profile between the two
+  ends over-estimated the force by up to 94 %, issue 14).  The resultant of each ring
+  is a screw: a force -F_N n through a point P of its axis (the point nearest the
+  centroid of the pressure, half-way between bore and journal) and a couple along n
+  (``NORMAL_COUPLE``, the pitch of the wrench: slices at different heights push in
+  different directions under a skew tilt).  n is normal to the journal surface, so
+  it leans by the tilt from the bearing's cross-section, and |d delta / d a| =
+  1/cos(tilt): a tilted edge contact carries 1/cos(tilt) times the force of the same
+  energy pressed radially.
 * **Axial**, per ring: the plane law is distributed uniformly over the annulus,
   p(x) = K_plane / (pi (R_b2^2 - R_b1^2)) max(delta(x), 0)^n_a: aligned it gives
   exactly K_plane delta^n_a (paper eq. (13), plane contact); tilted, the contact is the
@@ -117,13 +123,15 @@ Rolling Bearing Analysis, 5th ed. 2007), so that one formula covers every config
   exactly: relative error < 4e-6 on the force and < 5e-8 R_b2 on the centroid (worst
   case: contact boundary near the far rim; < 1e-8 elsewhere), a smooth function of the
   configuration (checked against adaptive quadrature in the tests).
-* **Damping** (L-N, paper eq. (11)): the elastic resultant F_el is multiplied by
-  [1 + 3 (1 - c_e^2)/4 * delta_dot / max(delta_dot_0, ONSET_RATE_FLOOR)], clamped at
-  >= 0 (:func:`~clearance_contact.normal_force.lankarani_nikravesh`), with delta_dot
-  the penetration rate *at the centroid*.  Because delta_dot is linear over the
-  region, this equals the pointwise L-N law integrated over it (exact for the force),
-  and it does not jump when the deepest point jumps (e.g. a flange face rocking through
-  zero tilt).  delta_dot_0 is the caller's onset rate of that candidate.
+* **Damping** (``dissipation``, default L-N, paper eq. (11)): pointwise, the pressure
+  at each point is multiplied by [1 + chi(c_e) delta_dot / max(delta_dot_0,
+  ONSET_RATE_FLOOR)], clamped at >= 0, chi of the joint's dissipation model
+  (:mod:`~clearance_contact.dissipation`; L-N: 3 (1 - c_e^2)/4), with delta_dot the
+  rate of that point's penetration.  Radial: at each quadrature node (the
+  slice rate is exact, from the twists).  Axial: delta_dot is linear over the face, so
+  the elastic resultant times the factor at the centroid rate is the pointwise law
+  integrated (exact for the force while the factor stays positive).  delta_dot_0 is the
+  caller's onset rate of that candidate.
 
 All four forces are continuous functions of the configuration (no switching between
 formulas with different values), with a continuous point of application.
@@ -170,7 +178,7 @@ Wrenches are [force, moment about the element's frame origin], world axes.
 Compiled kernel (``docs/contact-api.md``)
 ----------------------------------------
 :func:`revolute_kernel` (``RevoluteClearanceJoint.kernel``) computes all of the above
-into a flat float64 array ``out`` of ``RevoluteClearanceJoint.output_size = 98``
+into a flat float64 array ``out`` of ``RevoluteClearanceJoint.output_size = 102``
 values; offsets (class attributes, k = 4 candidates, r = 2 eccentricity rows, (k, 3)
 blocks row-major)::
 
@@ -178,12 +186,14 @@ blocks row-major)::
     POINT_OUTER 24 (3k)  POINT_INNER 36 (3k)      FRICTION_FORCE 48 (3k)
     ECCENTRICITY 60 (3r) WRENCH_OUTER 66 (6)      WRENCH_INNER 72 (6)   KIND 78 (k, as float)
     internal: CENTROID_DEPTH 82 (k, delta at P's slice), SPIN_RADIUS 86 (k, r_s),
-              SPIN_SPEED 90 (k, w_n r_s), SPIN_TORQUE 94 (k, T_spin)
+              SPIN_SPEED 90 (k, w_n r_s), SPIN_TORQUE 94 (k, T_spin),
+              NORMAL_COUPLE 98 (k, couple of the normal pressure about n)
 
 ``kernel_parameters`` (float64, built once per joint)::
 
     [R_j, R_b1, R_b2, L_b/2, L_j/2, K_line, K_plane / annulus area, n_r, n_a, c_e,
-     friction code, 5 friction parameters, C(n_r, 1..6), 10, disc rule (10 x 4)]
+     friction code, 5 friction parameters, radial law code, 2 radial law parameters,
+     dissipation code, 2 dissipation parameters, 10, disc rule (10 x 4)]
 
 Status (:mod:`~clearance_contact.compiled`): 0 ok, ``STATUS_NONFINITE_INPUT``,
 ``STATUS_NONFINITE_PENETRATION``, ``STATUS_AXIS_TILT`` (journal at >= 90 deg), or
@@ -219,9 +229,13 @@ from .friction import (
     NoFriction,
     encoded_force_over_speed,
 )
+from .dissipation import DEFAULT_DISSIPATION, DISSIPATION_PARAMETERS, dissipation_encoding, encoded_damping_factor
 from .joint import ClearanceJoint, Shape, output_layout
-from .materials import Material, cylinder_line_stiffness, flat_punch_stiffness, require_material
-from .normal_force import EXPONENT_RANGE, lankarani_nikravesh, validate_normal_law
+from .materials import Material, flat_punch_stiffness, require_material
+from .normal_force import EXPONENT_RANGE
+from . import radial_laws
+from .radial_laws import RADIAL_LAW_PARAMETERS, RadialLaw
+from .radial_profile import RADIAL_NODES, dry_interval, half_integrals
 from .registry import register_joint_type
 from .result import KIND_LINE, KIND_NONE, KIND_PLANE, KIND_POINT
 
@@ -235,9 +249,6 @@ _TIE_DEPTH = 1.0e-14
 
 _TIE_TILT = 1.0e-14
 """|sin(tilt)| below which the end faces count as parallel (rounding of unit vectors)."""
-
-_SERIES_EPS = 0.02
-"""|b - a| / (a + b) below which the radial moments use their Taylor series."""
 
 _CLOSED_FORM_MIN_ANGLE = 0.5
 """Rim half-angle (rad) of the contact crescent below which the n = 1 disc integrals
@@ -273,53 +284,6 @@ def _x_minus_sin(x: float) -> float:
     for k in (210.0, 156.0, 110.0, 72.0, 42.0, 20.0):
         series = 1.0 - x2 / k * series
     return x * x2 / 6.0 * series
-
-
-@jit
-def _line_moments(a: float, b: float, n: float, bn: tuple) -> tuple[float, float, float]:
-    """Moments of p(u) = max(a + (b - a) u, 0)^n on u in [0, 1].
-
-    Returns (m0, u_c, var): integral, centroid and variance (about u_c) of p.
-    ``bn`` = binomial coefficients C(n, 1..6).  Needs max(a, b) > 0.
-    """
-    if a <= 0.0 or b <= 0.0:  # partial: a "triangle" x^n over the length lam
-        n1 = n + 1.0
-        n2 = n + 2.0
-        if a <= 0.0:
-            lam = b / (b - a)
-            m0 = lam * b**n / n1
-            u_c = 1.0 - lam / n2
-        else:
-            lam = a / (a - b)
-            m0 = lam * a**n / n1
-            u_c = lam / n2
-        var = lam * lam * (n1 / (n + 3.0) - (n1 / n2) ** 2)
-        return m0, u_c, var
-    s = a + b
-    eps = (b - a) / s
-    if -_SERIES_EPS < eps < _SERIES_EPS:
-        # (1/2) int_{-1}^{1} x^k (1 + eps x)^n dx, k = 0, 1, 2, as series in eps
-        b1, b2, b3, b4, b5, b6 = bn
-        e2 = eps * eps
-        phi0 = 1.0 + e2 * (b2 / 3.0 + e2 * (b4 / 5.0 + e2 * b6 / 7.0))
-        phi1 = eps * (b1 / 3.0 + e2 * (b3 / 5.0 + e2 * b5 / 7.0))
-        phi2 = 1.0 / 3.0 + e2 * (b2 / 5.0 + e2 * (b4 / 7.0 + e2 * b6 / 9.0))
-        r1 = phi1 / phi0
-        return (0.5 * s) ** n * phi0, 0.5 * (1.0 + r1), 0.25 * (phi2 / phi0 - r1 * r1)
-    n1 = n + 1.0
-    n2 = n + 2.0
-    n3 = n + 3.0
-    dl = b - a
-    an = a**n
-    bnn = b**n
-    q1 = (bnn * b - an * a) / n1
-    q2 = (bnn * b * b - an * a * a) / n2
-    q3 = (bnn * b * b * b - an * a * a * a) / n3
-    m0 = q1 / dl
-    m1 = (q2 - a * q1) / (dl * dl)
-    m2 = (q3 - 2.0 * a * q2 + a * a * q1) / (dl * dl * dl)
-    u_c = m1 / m0
-    return m0, u_c, m2 / m0 - u_c * u_c
 
 
 @jit
@@ -408,8 +372,9 @@ _P_RADIAL_EXPONENT = 7
 _P_AXIAL_EXPONENT = 8
 _P_RESTITUTION = 9
 _P_FRICTION = 10  # kind code, then FRICTION_PARAMETERS values
-_P_BINOMIALS = _P_FRICTION + 1 + FRICTION_PARAMETERS  # C(n_r, 1..6)
-_P_QUAD_POINTS = _P_BINOMIALS + 6
+_P_RADIAL_LAW = _P_FRICTION + 1 + FRICTION_PARAMETERS  # code, then RADIAL_LAW_PARAMETERS values
+_P_DISSIPATION = _P_RADIAL_LAW + 1 + RADIAL_LAW_PARAMETERS  # code, then DISSIPATION_PARAMETERS values
+_P_QUAD_POINTS = _P_DISSIPATION + 1 + DISSIPATION_PARAMETERS
 _P_QUAD_RULE = _P_QUAD_POINTS + 1  # _QUAD_POINTS rows of 4 (see _disc_rule)
 _N_PARAMETERS = _P_QUAD_RULE + 4 * _QUAD_POINTS
 
@@ -418,8 +383,10 @@ _K = 4
 # internal sections (k each, after the common layout): what the wrenches and a Python friction law need:
 # CENTROID_DEPTH penetration at the centroid (P = point_outer + CENTROID_DEPTH / 2 * normal), SPIN_RADIUS
 # rms radius r_s of the pressure about P (m), SPIN_SPEED spin slip w_n r_s (m/s) where friction was
-# evaluated, SPIN_TORQUE friction torque T_spin about the normal on the journal (N m)
-_EXTRA_OUTPUTS = ("CENTROID_DEPTH", "SPIN_RADIUS", "SPIN_SPEED", "SPIN_TORQUE")
+# evaluated, SPIN_TORQUE friction torque T_spin about the normal on the journal (N m), NORMAL_COUPLE
+# couple of the normal pressure about the normal on the journal (N m): the pitch of the radial wrench
+# under a skew tilt (module docstring), 0 for the axial candidates
+_EXTRA_OUTPUTS = ("CENTROID_DEPTH", "SPIN_RADIUS", "SPIN_SPEED", "SPIN_TORQUE", "NORMAL_COUPLE")
 _LAYOUT = output_layout(_K, 2, _EXTRA_OUTPUTS)
 PENETRATION = _LAYOUT["PENETRATION"]
 PENETRATION_RATE = _LAYOUT["PENETRATION_RATE"]
@@ -436,6 +403,7 @@ CENTROID_DEPTH = _LAYOUT["CENTROID_DEPTH"]
 SPIN_RADIUS = _LAYOUT["SPIN_RADIUS"]
 SPIN_SPEED = _LAYOUT["SPIN_SPEED"]
 SPIN_TORQUE = _LAYOUT["SPIN_TORQUE"]
+NORMAL_COUPLE = _LAYOUT["NORMAL_COUPLE"]
 OUTPUT_SIZE = _LAYOUT["OUTPUT_SIZE"]
 
 
@@ -513,19 +481,15 @@ def _transpose_times(r00, r01, r02, r10, r11, r12, r20, r21, r22, x, y, z):
 
 
 @jit
-def _write_candidate(out, k, nx, ny, nz, ox, oy, oz, delta_c, spin_radius, rate_c, onset_rate, f_el, ce):
-    """Candidate ``k``'s normal, contact points, centroid depth, spin radius and normal force into ``out``.
-
-    The normal force is the L-N hysteresis on the distributed resultant (unit
-    "penetration", stiffness F_el, exponent 1): F = F_el [1 + 3(1-ce^2)/4 rate_c /
-    max(onset, floor)], clamped >= 0; 0 out of contact (F_el = 0).
-    """
+def _write_candidate(out, k, nx, ny, nz, ox, oy, oz, delta_c, spin_radius, force_n, couple):
+    """Candidate ``k``'s normal, contact points, centroid depth, spin radius, normal force and couple into ``out``."""
     _write3(out, NORMAL + 3 * k, nx, ny, nz)
     _write3(out, POINT_OUTER + 3 * k, ox, oy, oz)
     _write3(out, POINT_INNER + 3 * k, ox + delta_c * nx, oy + delta_c * ny, oz + delta_c * nz)
     out[CENTROID_DEPTH + k] = delta_c
     out[SPIN_RADIUS + k] = spin_radius
-    out[NORMAL_FORCE + k] = lankarani_nikravesh(1.0, rate_c, onset_rate, f_el, 1.0, ce) if f_el > 0.0 else 0.0
+    out[NORMAL_FORCE + k] = force_n
+    out[NORMAL_COUPLE + k] = couple
 
 
 @jit
@@ -547,8 +511,8 @@ def revolute_wrenches(outer_position, inner_position, out):
     """Write ``out[WRENCH_OUTER:WRENCH_INNER + 6]`` from the forces in ``out`` (module docstring).
 
     Each candidate with F_N > 0 acts at P = point_outer + delta_c / 2 n: on the journal
-    f = -F_N n + F_t at P plus T_spin n, on the bearing the opposite; moments about each
-    element's frame origin.
+    f = -F_N n + F_t at P plus (T_spin + normal couple) n, on the bearing the opposite;
+    moments about each element's frame origin.
     """
     pbx = outer_position[0]
     pby = outer_position[1]
@@ -567,7 +531,7 @@ def revolute_wrenches(outer_position, inner_position, out):
         if force_n <= 0.0:
             continue
         nx, ny, nz, rjx, rjy, rjz, rbx, rby, rbz = _force_point_arms(out, k, pjx, pjy, pjz, dpx, dpy, dpz)
-        t_spin = out[SPIN_TORQUE + k]
+        t_spin = out[SPIN_TORQUE + k] + out[NORMAL_COUPLE + k]
         fx = -force_n * nx + out[FRICTION_FORCE + 3 * k]
         fy = -force_n * ny + out[FRICTION_FORCE + 3 * k + 1]
         fz = -force_n * nz + out[FRICTION_FORCE + 3 * k + 2]
@@ -739,27 +703,21 @@ def revolute_kernel(
     b2x, b2y, b2z = r01, r11, r21
     ubx, uby, ubz = r02, r12, r22
     ujx, ujy, ujz = j02, j12, j22
-    ce = parameters[_P_RESTITUTION]
 
     # ---- radial candidates 0 (top, z in [0, l]) and 2 (bottom, z in [-l, 0]) ------------
-    k_half = 0.5 * parameters[_P_LINE_STIFFNESS]
-    n_r = parameters[_P_RADIAL_EXPONENT]
-    binomials = (
-        parameters[_P_BINOMIALS],
-        parameters[_P_BINOMIALS + 1],
-        parameters[_P_BINOMIALS + 2],
-        parameters[_P_BINOMIALS + 3],
-        parameters[_P_BINOMIALS + 4],
-        parameters[_P_BINOMIALS + 5],
-    )
+    # exact profile: wrench = -grad of the elastic energy, quadrature over the wetted
+    # pieces (radial_profile), pointwise damping
+    z_a, z_b, dry = dry_interval(mx, my, tx, ty, r_j, r_b1)
     a, a_dot = mid[0], mid[1]
     for k in (0, 2):
         if k == 0:
             end = top
-            ring = 1.0
+            h0 = 0.0
+            h1 = hl
         else:
             end = bot
-            ring = -1.0
+            h0 = -hl
+            h1 = 0.0
         b, b_dot = end[0], end[1]
         deep = b >= a
         delta_max = b if deep else a
@@ -768,50 +726,88 @@ def revolute_kernel(
             out[PENETRATION_RATE + k] = b_dot if deep else a_dot
         else:  # kink of max(a, b): right derivative
             out[PENETRATION_RATE + k] = b_dot if b_dot > a_dot else a_dot
+        s0 = 0.0
         if delta_max > 0.0:
-            m0, u_c, var = _line_moments(a, b, n_r, binomials)
-            f_el = k_half * m0
-            out[KIND + k] = KIND_LINE if (a > 0.0 and b > 0.0) else KIND_POINT
-            z_c = ring * hl * u_c
-            rate_c = a_dot + (b_dot - a_dot) * u_c
-            delta_c = a + (b - a) * u_c
-            spin_radius = hl * math.sqrt(var) if var > 0.0 else 0.0
-            # eccentricity direction of the centroid's slice
+            sgx, sgy, szgx, szgy, sgtx, sgty, s0, s1, s2, sd = half_integrals(
+                h0, h1, z_a, z_b, mx, my, tx, ty, mdx, mdy, tdx, tdy, r_j, r_b1, onset_rates[k],
+                parameters, _P_RADIAL_LAW, _P_DISSIPATION, RADIAL_NODES,
+            )
+        if s0 > 0.0:
+            z_c = s1 / s0
+            var = s2 / s0 - z_c * z_c
+            delta_c = sd / s0
+            spin_radius = math.sqrt(var) if var > 0.0 else 0.0
+            whole = a > 0.0 and b > 0.0 and (not dry or z_b <= h0 or z_a >= h1)
+            out[KIND + k] = KIND_LINE if whole else KIND_POINT
             ex = mx + z_c * tx
             ey = my + z_c * ty
             e = norm2(ex, ey)
             if e > 0.0:
                 hx = ex / e
                 hy = ey / e
-            elif deep:
-                hx, hy = end[2], end[3]
             else:
-                hx, hy = mid[2], mid[3]
+                hx, hy = end[2], end[3]
+            # F = (-S_g, S_g.t), M = -d x (S_G, -S_G.t) / d_z (bearing axes, about o_j)
+            fbz = sgx * tx + sgy * ty
+            sgx_ = szgx - az * sgx + sgtx
+            sgy_ = szgy - az * sgy + sgty
+            vx = sgx_ / dz
+            vy = sgy_ / dz
+            vz = -(sgx_ * tx + sgy_ * ty) / dz
+            fwx = -(r00 * sgx + r01 * sgy) + r02 * fbz
+            fwy = -(r10 * sgx + r11 * sgy) + r12 * fbz
+            fwz = -(r20 * sgx + r21 * sgy) + r22 * fbz
+            mbx = dz * vy - dy * vz
+            mby = dx * vz - dz * vx
+            mbz = dy * vx - dx * vy
+            mwx = r00 * mbx + r01 * mby + r02 * mbz
+            mwy = r10 * mbx + r11 * mby + r12 * mbz
+            mwz = r20 * mbx + r21 * mby + r22 * mbz
+            force_n = math.sqrt(fwx * fwx + fwy * fwy + fwz * fwz)
         else:
-            f_el = rate_c = spin_radius = 0.0
+            force_n = spin_radius = 0.0
             out[KIND + k] = KIND_NONE
-            z_c = ring * hl if deep else 0.0
+            z_c = h1 if (deep and k == 0) or (not deep and k == 2) else h0
             delta_c = delta_max
             if deep:
                 hx, hy = end[2], end[3]
             else:
                 hx, hy = mid[2], mid[3]
-        # bearing-radial direction, then its part normal to the journal axis
+        # centroid's point half-way between the bore and the journal, radial direction r
         rx = hx * b1x + hy * b2x
         ry = hx * b1y + hy * b2y
         rz = hx * b1z + hy * b2z
-        ru = rx * ujx + ry * ujy + rz * ujz
-        nx = rx - ru * ujx
-        ny = ry - ru * ujy
-        nz = rz - ru * ujz
-        nn = math.sqrt(nx * nx + ny * ny + nz * nz)
-        nx = nx / nn
-        ny = ny / nn
-        nz = nz / nn
-        ox = pbx + z_c * ubx + r_b1 * rx
-        oy = pby + z_c * uby + r_b1 * ry
-        oz = pbz + z_c * ubz + r_b1 * rz
-        _write_candidate(out, k, nx, ny, nz, ox, oy, oz, delta_c, spin_radius, rate_c, onset_rates[k], f_el, ce)
+        arm = r_b1 + 0.5 * delta_c
+        cx = pbx + z_c * ubx + arm * rx
+        cy = pby + z_c * uby + arm * ry
+        cz = pbz + z_c * ubz + arm * rz
+        couple = 0.0
+        if force_n > 0.0:
+            # the resultant as a screw: force along -n through P, couple along n
+            nx = -fwx / force_n
+            ny = -fwy / force_n
+            nz = -fwz / force_n
+            inv = 1.0 / (force_n * force_n)
+            p0x = (fwy * mwz - fwz * mwy) * inv  # point of the axis nearest o_j, relative to o_j
+            p0y = (fwz * mwx - fwx * mwz) * inv
+            p0z = (fwx * mwy - fwy * mwx) * inv
+            along = (cx - pjx - p0x) * nx + (cy - pjy - p0y) * ny + (cz - pjz - p0z) * nz
+            cx = pjx + p0x + along * nx
+            cy = pjy + p0y + along * ny
+            cz = pjz + p0z + along * nz
+            couple = mwx * nx + mwy * ny + mwz * nz
+        else:  # no force: the radial direction normal to the journal axis
+            ru = rx * ujx + ry * ujy + rz * ujz
+            nx = rx - ru * ujx
+            ny = ry - ru * ujy
+            nz = rz - ru * ujz
+            nn = math.sqrt(nx * nx + ny * ny + nz * nz)
+            nx = nx / nn
+            ny = ny / nn
+            nz = nz / nn
+        half_c = 0.5 * delta_c
+        _write_candidate(out, k, nx, ny, nz, cx - half_c * nx, cy - half_c * ny, cz - half_c * nz,
+                         delta_c, spin_radius, force_n, couple)
 
     # ---- axial candidates 1 (top face) and 3 (bottom face) --------------------------------
     n_a = parameters[_P_AXIAL_EXPONENT]
@@ -868,7 +864,11 @@ def revolute_kernel(
         ox = pbx + ring * hl * ubx + cx * b1x + cy * b2x
         oy = pby + ring * hl * uby + cx * b1y + cy * b2y
         oz = pbz + ring * hl * ubz + cx * b1z + cy * b2z
-        _write_candidate(out, k, nx, ny, nz, ox, oy, oz, delta_c, spin_radius, rate_c, onset_rates[k], f_el, ce)
+        force_n = 0.0
+        if f_el > 0.0:
+            force_n = f_el * encoded_damping_factor(parameters, _P_DISSIPATION, rate_c, onset_rates[k])
+            force_n = force_n if force_n > 0.0 else 0.0
+        _write_candidate(out, k, nx, ny, nz, ox, oy, oz, delta_c, spin_radius, force_n, 0.0)
 
     if not math.isfinite(out[PENETRATION] + out[PENETRATION + 1] + out[PENETRATION + 2] + out[PENETRATION + 3]):
         return STATUS_NONFINITE_PENETRATION
@@ -942,7 +942,15 @@ class RevoluteClearanceJoint(ClearanceJoint):
     journal_material, bearing_material:
         :class:`~clearance_contact.materials.Material` of each element.
     restitution:
-        c_e of the L-N damping, range (0, 1].
+        c_e of the damping, range (0, 1].
+    dissipation:
+        Normal dissipation model, a name of
+        :data:`~clearance_contact.dissipation.DISSIPATION_MODELS`; default
+        ``"lankarani_nikravesh"``.
+    radial_law:
+        Radial contact law, a name of :data:`~clearance_contact.radial_laws.RADIAL_LAWS`;
+        default ``"linear"`` (K_line delta^n_r); the others set their own stiffness and
+        exponent (leave ``radial_stiffness`` / ``radial_exponent`` unset).
     radial_exponent, axial_exponent:
         n_r, n_a of the line and plane laws, range [1, 1.5]; default 1 (linear laws of
         the default stiffnesses).
@@ -960,7 +968,8 @@ class RevoluteClearanceJoint(ClearanceJoint):
 
     Joint type ``"revolute"`` (:mod:`~clearance_contact.registry`); scene keys
     ``journal_radius``, ``radial_clearance`` (c_r), ``bearing_outer_radius``,
-    ``bearing_length``, ``axial_clearance`` (c_a), and the exponents and stiffnesses.
+    ``bearing_length``, ``axial_clearance`` (c_a), the exponents and stiffnesses, and the
+    names ``radial_law`` and ``dissipation``.
     """
 
     __slots__ = (
@@ -978,7 +987,8 @@ class RevoluteClearanceJoint(ClearanceJoint):
         "_k_plane",
         "_k_point",
         "_frictionless",
-        "_binomials",
+        "_radial_law",
+        "_dissipation",
         "_plane_density",
         "_half_l_b",
         "_half_l_j",
@@ -993,10 +1003,13 @@ class RevoluteClearanceJoint(ClearanceJoint):
     SCENE_KEYS = (
         "journal_radius", "radial_clearance", "bearing_outer_radius", "bearing_length", "axial_clearance",
         "radial_exponent", "axial_exponent", "point_exponent", "radial_stiffness", "axial_stiffness", "point_stiffness",
+        "radial_law", "dissipation",
     )  # fmt: skip
+    NAME_KEYS = ("radial_law", "dissipation")
     REQUIRED_KEYS = ("journal_radius", "radial_clearance", "bearing_outer_radius", "bearing_length", "axial_clearance")
     GEOMETRY_KEYS = REQUIRED_KEYS
     GAP_KEYS = ("radial_clearance", "axial_clearance")
+    FORCE_GROUPS = {"radial": (0, 2), "axial": (1, 3)}
     DEFAULT_GEOMETRY = {
         "journal_radius": 0.02, "radial_clearance": 1.0e-4, "bearing_outer_radius": 0.035, "bearing_length": 0.04, "axial_clearance": 1.0e-4,
     }  # fmt: skip
@@ -1022,6 +1035,8 @@ class RevoluteClearanceJoint(ClearanceJoint):
         radial_stiffness: float | None = None,
         axial_stiffness: float | None = None,
         point_stiffness: float | None = None,
+        radial_law: str = "linear",
+        dissipation: str = DEFAULT_DISSIPATION,
     ) -> None:
         r_j = require_positive("journal_radius", journal_radius)
         r_b1 = require_positive("bearing_inner_radius", bearing_inner_radius)
@@ -1046,16 +1061,9 @@ class RevoluteClearanceJoint(ClearanceJoint):
         require_material("journal_material", journal_material)
         require_material("bearing_material", bearing_material)
         code, friction_parameters = self._wire_friction(friction)
-        n_r = require_in_range("radial_exponent", radial_exponent, *EXPONENT_RANGE)
         n_a = require_in_range("axial_exponent", axial_exponent, *EXPONENT_RANGE)
         n_p = require_in_range("point_exponent", point_exponent, *EXPONENT_RANGE)
-        if radial_stiffness is None:
-            if n_r != 1.0:
-                raise ContactParameterError(
-                    f"radial_exponent={radial_exponent!r} needs an explicit radial_stiffness: the default "
-                    "line stiffness pi/4 E* L_b (N/m) is valid for radial_exponent 1 only"
-                )
-            radial_stiffness = cylinder_line_stiffness(l_b, bearing_material, journal_material)
+        law = radial_laws.radial_law(radial_law, r_j, r_b1, l_b, bearing_material, journal_material, radial_stiffness, radial_exponent)
         if axial_stiffness is None:
             if n_a != 1.0:
                 raise ContactParameterError(
@@ -1063,10 +1071,9 @@ class RevoluteClearanceJoint(ClearanceJoint):
                     "flat-punch stiffness 2 E* R_b2 (N/m) is valid for axial_exponent 1 only"
                 )
             axial_stiffness = flat_punch_stiffness(r_b2, bearing_material, journal_material)
-        k_line = require_positive("radial_stiffness", radial_stiffness)
         k_plane = require_positive("axial_stiffness", axial_stiffness)
         k_point = None if point_stiffness is None else require_positive("point_stiffness", point_stiffness)
-        ce = validate_normal_law(k_line, n_r, restitution)[2]
+        ce = require_in_range("restitution", restitution, 0.0, 1.0, low_inclusive=False)
 
         self._r_j = r_j
         self._r_b1 = r_b1
@@ -1078,35 +1085,32 @@ class RevoluteClearanceJoint(ClearanceJoint):
         self._journal_material = journal_material
         self._bearing_material = bearing_material
         self._restitution = ce
-        self._n_r = n_r
+        self._radial_law = law
+        self._dissipation = dissipation
+        self._n_r = law.exponent
         self._n_a = n_a
         self._n_p = n_p
-        self._k_line = k_line
+        self._k_line = law.stiffness
         self._k_plane = k_plane
         self._k_point = k_point
         self._plane_density = k_plane / (math.pi * (r_b2 * r_b2 - r_b1 * r_b1))
         self._disc_rule = _disc_rule(_QUAD_POINTS, n_a)
         self._frictionless = isinstance(friction, NoFriction)
-        binomials = []
-        c = 1.0
-        for j in range(1, 7):
-            c *= (n_r - j + 1) / j
-            binomials.append(c)
-        self._binomials = tuple(binomials)
         parameters = np.zeros(_N_PARAMETERS)
         parameters[_P_JOURNAL_RADIUS] = r_j
         parameters[_P_BORE_RADIUS] = r_b1
         parameters[_P_OUTER_RADIUS] = r_b2
         parameters[_P_HALF_BEARING_LENGTH] = self._half_l_b
         parameters[_P_HALF_JOURNAL_LENGTH] = self._half_l_j
-        parameters[_P_LINE_STIFFNESS] = k_line
+        parameters[_P_LINE_STIFFNESS] = law.stiffness or 0.0  # informative (the law is at _P_RADIAL_LAW)
         parameters[_P_PLANE_DENSITY] = self._plane_density
-        parameters[_P_RADIAL_EXPONENT] = n_r
+        parameters[_P_RADIAL_EXPONENT] = law.exponent or 0.0
         parameters[_P_AXIAL_EXPONENT] = n_a
         parameters[_P_RESTITUTION] = ce
         parameters[_P_FRICTION] = code
-        parameters[_P_FRICTION + 1 : _P_BINOMIALS] = friction_parameters
-        parameters[_P_BINOMIALS:_P_QUAD_POINTS] = self._binomials
+        parameters[_P_FRICTION + 1 : _P_RADIAL_LAW] = friction_parameters
+        parameters[_P_RADIAL_LAW:_P_DISSIPATION] = self._radial_law.encoding()
+        parameters[_P_DISSIPATION:_P_QUAD_POINTS] = dissipation_encoding(dissipation, ce)
         parameters[_P_QUAD_POINTS] = _QUAD_POINTS
         parameters[_P_QUAD_RULE:] = self._disc_rule.ravel()
         self.kernel_parameters = parameters
@@ -1124,7 +1128,7 @@ class RevoluteClearanceJoint(ClearanceJoint):
             bearing_material=outer_material,
             restitution=restitution,
             friction=friction,
-            **parameters,  # exponents and stiffnesses
+            **parameters,  # exponents, stiffnesses, radial_law, dissipation
         )
 
     # -- parameters -----------------------------------------------------------------
@@ -1137,6 +1141,17 @@ class RevoluteClearanceJoint(ClearanceJoint):
     def axial_clearance(self) -> float:
         """c_a = L_j - L_b (m), total (c_a / 2 per side when centred); as given when built from scene keys."""
         return self.given("axial_clearance", self._l_j - self._l_b)
+
+    @property
+    def scene_parameters(self) -> dict[str, float | str]:
+        """As :attr:`ClearanceJoint.scene_parameters`; a radial law other than ``"linear"`` sets its
+        own stiffness and exponent, so they are not reported (the joint rebuilds from these keys)."""
+        out = super().scene_parameters
+        if self._radial_law.name != "linear":
+            for key in ("radial_stiffness", "radial_exponent"):
+                if key not in self._given_parameters():
+                    out.pop(key, None)
+        return out
 
     def candidate_clearances(self) -> np.ndarray:
         """(4,) [c_r, c_a, c_r, c_a] in the candidates' order."""
@@ -1184,9 +1199,19 @@ class RevoluteClearanceJoint(ClearanceJoint):
         return self._n_p
 
     @property
-    def radial_stiffness(self) -> float:
-        """K_line (N/m^n_r), whole bearing length."""
+    def radial_stiffness(self) -> float | None:
+        """K (N/m^n_r) of a power radial law for the whole bearing length; None for ``"johnson"``."""
         return self._k_line
+
+    @property
+    def dissipation(self) -> str:
+        """Name of the normal dissipation model (:mod:`~clearance_contact.dissipation`)."""
+        return self._dissipation
+
+    @property
+    def radial_law(self) -> RadialLaw:
+        """The radial contact law (:mod:`~clearance_contact.radial_laws`)."""
+        return self._radial_law
 
     @property
     def axial_stiffness(self) -> float:
@@ -1206,7 +1231,8 @@ class RevoluteClearanceJoint(ClearanceJoint):
             f"bearing_material={self._bearing_material!r}, restitution={self._restitution!r}, "
             f"radial_exponent={self._n_r!r}, axial_exponent={self._n_a!r}, point_exponent={self._n_p!r}, "
             f"friction={self._friction!r}, radial_stiffness={self._k_line!r}, "
-            f"axial_stiffness={self._k_plane!r}, point_stiffness={self._k_point!r})"
+            f"axial_stiffness={self._k_plane!r}, point_stiffness={self._k_point!r}, "
+            f"radial_law={self._radial_law.name!r}, dissipation={self._dissipation!r})"
         )
 
     # -- geometry -------------------------------------------------------------------

@@ -23,8 +23,10 @@ u_k = v_k + w_k x (P - origin_k).  Then::
     v_rel     = u_b - u_s                        slip of the ball relative to the socket
     v_t       = v_rel - (n . v_rel) n            tangential slip
 
-Forces (seed paper eqs. (11), (14), (15)): normal force magnitude F_N from the
-Lankarani-Nikravesh law (:func:`~clearance_contact.normal_force.lankarani_nikravesh`),
+Forces (seed paper eqs. (11), (14), (15)): normal force magnitude
+F_N = max(K delta^n [1 + chi(c_e) delta_dot / max(delta_dot_0, floor)], 0), chi of the
+joint's dissipation model (:mod:`~clearance_contact.dissipation`; default
+Lankarani-Nikravesh, :func:`~clearance_contact.normal_force.lankarani_nikravesh`),
 friction F_t = -g(|v_t|) v_t from the friction law (finite at zero slip).  On the ball::
 
     f_b = -F_N n + F_t,     m_b = (R_b - delta/2) n x F_t     (about b)
@@ -56,7 +58,7 @@ values; offsets (class attributes, k = 1 candidate, r = 1 eccentricity row)::
 
 ``kernel_parameters`` (float64, built once per joint)::
 
-    [R_b, R_s, c, K, n, c_e, friction code, 5 friction parameters]
+    [R_b, R_s, c, K, n, c_e, friction code, 5 friction parameters, dissipation code, 2 parameters]
 
 It returns a status (:mod:`~clearance_contact.compiled`): 0 ok,
 ``STATUS_NONFINITE_INPUT``, ``STATUS_NONFINITE_PENETRATION``, or
@@ -95,7 +97,8 @@ from .friction import (
 )
 from .joint import ClearanceJoint, Shape, output_layout
 from .materials import Material, hertz_sphere_stiffness, require_material
-from .normal_force import lankarani_nikravesh, validate_normal_law
+from .dissipation import DEFAULT_DISSIPATION, DISSIPATION_PARAMETERS, dissipation_encoding, encoded_damping_factor
+from .normal_force import validate_normal_law
 from .registry import register_joint_type
 from .result import KIND_NONE, KIND_POINT
 
@@ -109,7 +112,8 @@ _P_STIFFNESS = 3
 _P_EXPONENT = 4
 _P_RESTITUTION = 5
 _P_FRICTION = 6  # kind code, then FRICTION_PARAMETERS values
-_N_PARAMETERS = _P_FRICTION + 1 + FRICTION_PARAMETERS
+_P_DISSIPATION = _P_FRICTION + 1 + FRICTION_PARAMETERS  # code, then DISSIPATION_PARAMETERS values
+_N_PARAMETERS = _P_DISSIPATION + 1 + DISSIPATION_PARAMETERS
 
 # -- out layout (k = 1 candidate, r = 1 eccentricity row): joint.output_layout ------------
 _K = 1
@@ -240,9 +244,12 @@ def spherical_kernel(
     out[POINT_INNER + 2] = bz + r_b * nz
     out[KIND] = KIND_POINT if delta > 0.0 else KIND_NONE
 
-    force_n = lankarani_nikravesh(
-        delta, rate, onset_rates[0], parameters[_P_STIFFNESS], parameters[_P_EXPONENT], parameters[_P_RESTITUTION]
-    )
+    force_n = 0.0
+    if delta > 0.0:
+        force_n = parameters[_P_STIFFNESS] * delta ** parameters[_P_EXPONENT] * encoded_damping_factor(
+            parameters, _P_DISSIPATION, rate, onset_rates[0]
+        )
+        force_n = force_n if force_n > 0.0 else 0.0
     out[NORMAL_FORCE] = force_n
     fx = fy = fz = 0.0
     external = int(parameters[_P_FRICTION]) == FRICTION_EXTERNAL
@@ -301,7 +308,11 @@ class SphericalClearanceJoint(ClearanceJoint):
     ball_material, socket_material:
         :class:`~clearance_contact.materials.Material` of each element.
     restitution:
-        Coefficient of restitution c_e of the L-N law, range (0, 1].
+        Coefficient of restitution c_e of the damping, range (0, 1].
+    dissipation:
+        Normal dissipation model, a name of
+        :data:`~clearance_contact.dissipation.DISSIPATION_MODELS`; default
+        ``"lankarani_nikravesh"`` (seed paper eq. (11)).
     exponent:
         Force exponent n, range [1, 1.5] (1.5: Hertz point contact).
     friction:
@@ -311,7 +322,7 @@ class SphericalClearanceJoint(ClearanceJoint):
         the radii and materials, which requires ``exponent == 1.5``.
 
     Joint type ``"spherical"`` (:mod:`~clearance_contact.registry`); scene keys
-    ``ball_radius``, ``clearance`` (c = R_s - R_b), ``exponent``, ``stiffness``.
+    ``ball_radius``, ``clearance`` (c = R_s - R_b), ``exponent``, ``stiffness``, ``dissipation`` (a name).
     Compiled interface (module docstring, ``docs/contact-api.md``): ``kernel``,
     ``penetration_kernel``, ``kernel_parameters``, ``output_size`` and the offsets
     ``PENETRATION, PENETRATION_RATE, NORMAL_FORCE, NORMAL, POINT_OUTER, POINT_INNER,
@@ -319,16 +330,18 @@ class SphericalClearanceJoint(ClearanceJoint):
     ``N_CANDIDATES = 1``, ``N_ECCENTRICITY = 1``) from :class:`~clearance_contact.joint.ClearanceJoint`.
     """
 
-    __slots__ = ("_ball_radius", "_socket_radius", "_clearance", "_ball_material", "_socket_material", "_exponent", "_stiffness")
+    __slots__ = ("_ball_radius", "_socket_radius", "_clearance", "_ball_material", "_socket_material", "_exponent", "_stiffness", "_dissipation")
 
     type_name = "spherical"
     N_CANDIDATES = _K
     N_ECCENTRICITY = 1
     SITE_KINDS = ("spherical",)
-    SCENE_KEYS = ("ball_radius", "clearance", "exponent", "stiffness")
+    SCENE_KEYS = ("ball_radius", "clearance", "exponent", "stiffness", "dissipation")
+    NAME_KEYS = ("dissipation",)
     REQUIRED_KEYS = ("ball_radius", "clearance")
     GEOMETRY_KEYS = ("ball_radius", "clearance")
     GAP_KEYS = ("clearance",)
+    FORCE_GROUPS = {"radial": (0,)}  # the normal force
     DEFAULT_GEOMETRY = {"ball_radius": 0.015, "clearance": 1.0e-4}
     KERNEL_ID = 0
     PENETRATION_USES_ROTATIONS = False  # delta = |b - s| - c
@@ -345,6 +358,7 @@ class SphericalClearanceJoint(ClearanceJoint):
         exponent: float = 1.5,
         friction: FrictionLaw = NoFriction(),
         stiffness: float | None = None,
+        dissipation: str = DEFAULT_DISSIPATION,
     ) -> None:
         r_b = require_positive("ball_radius", ball_radius)
         r_s = require_positive("socket_radius", socket_radius)
@@ -381,7 +395,9 @@ class SphericalClearanceJoint(ClearanceJoint):
         parameters[_P_EXPONENT] = n
         parameters[_P_RESTITUTION] = ce
         parameters[_P_FRICTION] = code
-        parameters[_P_FRICTION + 1 :] = friction_parameters
+        parameters[_P_FRICTION + 1 : _P_DISSIPATION] = friction_parameters
+        parameters[_P_DISSIPATION:] = dissipation_encoding(dissipation, ce)
+        self._dissipation = dissipation
         self.kernel_parameters = parameters
 
     @classmethod
@@ -390,6 +406,7 @@ class SphericalClearanceJoint(ClearanceJoint):
         return cls(
             ball, ball + parameters["clearance"], inner_material, outer_material, restitution,
             parameters.get("exponent", 1.5), friction, parameters.get("stiffness"),
+            parameters.get("dissipation", DEFAULT_DISSIPATION),
         )  # fmt: skip
 
     # -- parameters -----------------------------------------------------------------
@@ -419,6 +436,11 @@ class SphericalClearanceJoint(ClearanceJoint):
         return self._exponent
 
     @property
+    def dissipation(self) -> str:
+        """Name of the normal dissipation model (:mod:`~clearance_contact.dissipation`)."""
+        return self._dissipation
+
+    @property
     def stiffness(self) -> float:
         """Contact stiffness K (N/m^n)."""
         return self._stiffness
@@ -432,7 +454,7 @@ class SphericalClearanceJoint(ClearanceJoint):
             f"SphericalClearanceJoint(ball_radius={self._ball_radius!r}, socket_radius={self._socket_radius!r}, "
             f"ball_material={self._ball_material!r}, socket_material={self._socket_material!r}, "
             f"restitution={self._restitution!r}, exponent={self._exponent!r}, friction={self._friction!r}, "
-            f"stiffness={self._stiffness!r})"
+            f"stiffness={self._stiffness!r}, dissipation={self._dissipation!r})"
         )
 
     # -- evaluation (ClearanceJoint.evaluate / penetration run the kernels) ---------------

@@ -16,6 +16,7 @@ import numpy as np
 import pinocchio as pin
 
 from robot.dynamics import equations as D
+from robot.dynamics.forces.build import build_force_set
 from robot.errors import SceneError
 from robot.model.initial_state import initial_state
 from robot.model.mechanism import Mechanism, build_mechanism
@@ -24,6 +25,9 @@ from robot.io.results import Result, make_result, mechanism_fingerprint
 from robot.scene.loader import OutputSpec, Scene, load_scene, misalignment_rotation
 from robot.integration.simulation import integrate
 from robot.model.trajectory import POSE_COORDINATES, FourierCoordinate, JointTrajectory, PlatformTrajectory, reference_platform_motion
+from robot.model.actuation import with_motion_actuators
+from robot.model.description import parse_mechanism
+from robot.model.time_functions import Fourier
 
 
 @dataclass(frozen=True, eq=False)
@@ -54,6 +58,8 @@ def _coordinate(table: dict) -> FourierCoordinate:
 def make_drive(scene: Scene, mechanism: Mechanism) -> tuple[D.Drive, PlatformLayout | None]:
     spec = scene.trajectory
     if spec.kind == "platform":
+        if any(a.mode != "motion" for a in scene.actuators.values()):
+            raise SceneError(f"scene {scene.name}: a platform trajectory drives every leg; [actuators] modes need type = 'joints'", key="actuators")
         layout = PlatformLayout.from_mechanism(mechanism)
         if spec.preset == "reference":
             return reference_platform_motion(layout, spec.period), layout
@@ -66,19 +72,22 @@ def make_drive(scene: Scene, mechanism: Mechanism) -> tuple[D.Drive, PlatformLay
             f"scene {scene.name}: a joint trajectory needs one entry per actuated joint {mechanism.actuated_joints}; "
             f"missing {missing}, not actuated {extra}"
         )
-    return JointTrajectory(spec.period, tuple(_coordinate(spec.coordinates[j]) for j in mechanism.actuated_joints)), None
+    omega = 2.0 * math.pi / spec.period
+    functions = tuple(spec.functions.get(j) or Fourier(_coordinate(spec.coordinates[j]), omega) for j in mechanism.actuated_joints)
+    return JointTrajectory(functions), None
 
 
 def build_run(scene: Scene | str | Path, **overrides) -> Run:
     """Build the mechanism with exactly the scene's clearance joints, its dynamics and initial state."""
     if not isinstance(scene, Scene):
         scene = load_scene(scene, **overrides)
-    mechanism = build_mechanism(scene.mechanism_path, {c.joint: c.outer_on for c in scene.clearances}, scene.gravity)
+    description = with_motion_actuators(parse_mechanism(scene.mechanism_path), scene.actuators, f"scene {scene.name}")
+    mechanism = build_mechanism(description, {c.joint: c.outer_on for c in scene.clearances}, scene.gravity)
     drive, layout = make_drive(scene, mechanism)
     if not mechanism.model.existFrame(scene.end_effector):
         raise SceneError(f"scene {scene.name}: end_effector={scene.end_effector!r} is not a frame of the mechanism")
     dynamics = D.make_dynamics_model(
-        mechanism, {c.joint: c.law for c in scene.clearances}, drive, scene.baumgarte, scene.end_effector
+        mechanism, {c.joint: c.law for c in scene.clearances}, drive, scene.baumgarte, scene.end_effector, forces=build_force_set(scene, mechanism)
     )
     if layout is not None:
         pose, _, _ = drive.pose(0.0)

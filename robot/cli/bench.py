@@ -2,7 +2,8 @@
 
 Times the spherical joint (in contact with Brown-McPhee friction, out of contact,
 and its cheap ``penetration()``) and the revolute joint (axes misaligned with all
-four candidates in contact, and centred out of contact), each through
+four candidates in contact, centred out of contact, and a skew-tilted contact for each
+radial law of :data:`clearance_contact.RADIAL_LAWS`), each through
 
 * ``evaluate`` (the Python API: input checks, kernel, ``JointContact`` of views), and
 * the raw compiled ``kernel(parameters, ..., out)`` with a preallocated ``out`` (what a
@@ -103,28 +104,41 @@ def revolute_cases(repeats: int, number: int) -> dict:
         from clearance_contact import RevoluteClearanceJoint
     except ImportError as exc:
         return {"revolute": {"skipped": f"RevoluteClearanceJoint not importable: {exc}"}}
-    joint = RevoluteClearanceJoint(
-        journal_radius=0.010,
-        bearing_inner_radius=0.0101,
-        bearing_outer_radius=0.020,
-        journal_length=0.0402,
-        bearing_length=0.040,
-        journal_material=STEEL,
-        bearing_material=STEEL,
-        restitution=0.9,
-        friction=FRICTION,
-    )
+    from clearance_contact.radial_laws import RADIAL_LAWS
+
+    def joint_with(law: str) -> RevoluteClearanceJoint:
+        return RevoluteClearanceJoint(
+            journal_radius=0.010,
+            bearing_inner_radius=0.0101,
+            bearing_outer_radius=0.020,
+            journal_length=0.0402,
+            bearing_length=0.040,
+            journal_material=STEEL,
+            bearing_material=STEEL,
+            restitution=0.9,
+            friction=FRICTION,
+            radial_law=law,
+        )
+
+    joint = joint_with("linear")
     tilt = np.arctan((joint.radial_clearance + 5e-6) / 0.020)
     pos = np.array([0.0, 0.3, 0.2])
     twist_j = np.array([0.01, 0.02, -0.01, 0.3, -0.2, 5.0])
     twist_b = np.array([0.0, 0.0, 0.0, 0.1, 0.0, 0.0])
     onset = np.full(4, 0.05)
     common = (pos, twist_b, np.eye(3), pos, twist_j, onset)
-    return {
+    # skew tilt: bearing offset along x by c_r - 2 um and tilted about x by 0.9 c_r / (L_b/2)
+    # (the journal axis leans sideways to the eccentricity: curved profile, both rings wet)
+    skew_pos = pos + np.array([joint.radial_clearance - 2e-6, 0.0, 0.0])
+    skew = (_rot_x(0.9 * joint.radial_clearance / 0.020), pos, twist_b, np.eye(3), skew_pos, twist_j, onset)
+    cases = {
         "revolute_misaligned_in_contact": _case(joint, (_rot_x(tilt), *common), repeats, number),
         "revolute_out_of_contact": _case(joint, (np.eye(3), *common), repeats, number),
         "revolute_penetration": _penetration_case(joint, _rot_x(tilt), pos, np.eye(3), pos, repeats, number),
     }
+    for law in RADIAL_LAWS:  # every radial law, skew-tilted contact (the dissipation models share one code path)
+        cases[f"revolute_skew_in_contact_{law}"] = _case(joint_with(law), skew, repeats, number)
+    return cases
 
 
 def plain_python_cases(repeats: int, number: int) -> dict:
@@ -175,12 +189,12 @@ def execute(args: argparse.Namespace) -> int:
     if plain is not None:
         report["plain_python_cases"] = plain
     atomic_write_text(args.out, json.dumps(report, indent=2) + "\n")
-    print(f"{'case':34s} {'evaluate':>10s} {'kernel':>10s}" + (f" {'plain eval':>11s} {'plain kern':>11s}" if plain else ""))
+    print(f"{'case':38s} {'evaluate':>10s} {'kernel':>10s}" + (f" {'plain eval':>11s} {'plain kern':>11s}" if plain else ""))
     for name, case in cases.items():
         if "median_us" not in case:
-            print(f"{name:34s} {case}")
+            print(f"{name:38s} {case}")
             continue
-        line = f"{name:34s} {case['median_us']:8.2f}us {case['kernel']['median_us']:8.2f}us"
+        line = f"{name:38s} {case['median_us']:8.2f}us {case['kernel']['median_us']:8.2f}us"
         if plain:
             line += f" {plain[name]['median_us']:9.2f}us {plain[name]['kernel']['median_us']:9.2f}us"
         print(line)

@@ -16,8 +16,11 @@ COMMANDS: dict[str, str] = {
     "describe": "robot.cli.describe",
     "bench": "robot.cli.bench",
     "bench-run": "robot.cli.bench_run",
+    "contact-laws": "robot.cli.contact_laws",
     "work-precision": "robot.cli.work_precision",
     "build-urdf": "robot.cli.build_urdf",
+    "sweep": "robot.cli.sweep",
+    "bench-sweep": "robot.cli.bench_sweep",
 }
 
 #: one-line help of each command, for ``clearance --help`` without importing the modules
@@ -29,6 +32,9 @@ SUMMARIES: dict[str, str] = {
     "describe": "print a mechanism's bodies, joints, closures, mobility and mass",
     "bench": "microseconds per clearance-joint contact evaluation",
     "bench-run": "CPU time of each phase of a whole run, against the floor (JSON and a table)",
+    "contact-laws": "tables of the contact laws: rebound of each dissipation model, penetration of each radial law",
     "work-precision": "speed against accuracy of every integrator, stability maps",
     "build-urdf": "regenerate urdf/ups_rps.urdf from the design parameters",
+    "sweep": "run a parameter sweep on dask, stored as an xarray dataset in zarr",
+    "bench-sweep": "benchmark of the sweep engine: runs per minute, parallel efficiency, overhead",
 }

@@ -5,10 +5,12 @@ Seed paper eq. (24) (MODEL-NOTES 5)::
     [ M(q)   Phi_q^T ] [ qdd    ]   [ Q(q, qd, t)                          ]
     [ Phi_q  0       ] [ lambda ] = [ gamma - 2 alpha Phid - beta^2 Phi    ]
 
-``Q = -h(q, qd) + sum_c J_c^T w_c``: ``h`` gathers gravity and velocity terms
+``Q = -h(q, qd) + sum_c J_c^T w_c + Q_f``: ``h`` gathers gravity and velocity terms
 (Pinocchio's ``nonLinearEffects``), ``w_c`` are the clearance contact wrenches
 (``clearance_contact``, about each element frame origin, world axes) mapped
-through the ``LOCAL_WORLD_ALIGNED`` frame Jacobians ``J_c`` of those frames.
+through the ``LOCAL_WORLD_ALIGNED`` frame Jacobians ``J_c`` of those frames,
+``Q_f`` the generalized force of the scene's force elements and force-driven
+actuators (:mod:`robot.dynamics.forces`; absent, and free, when there are none).
 ``Phi`` holds the closures and the five driving constraints
 ``q_k - s_k(t) = 0`` (``robot.model.constraints``); ``Phid = Phi_q qd - [0; sd]``.
 
@@ -25,7 +27,16 @@ ones, the driving forces unique.
 **Driving force sign.** The driving row of actuator k is the unit row of its
 prismatic coordinate (the leg length), so the actuator's generalized force is
 ``-lambda_k = lambda_pin_k``: ``driving_force > 0`` means the actuator pushes
-(extends the leg), ``< 0`` pulls.
+(extends the leg), ``< 0`` pulls. In general ``driving_force`` is the generalized
+force the actuator applies on its joint coordinate, positive in the direction of
+increasing coordinate: N on a prismatic joint, N m about a revolute joint's axis
+(right-hand rule); its power ``driving_force * qd_k`` is positive when the
+actuator does work on the mechanism.
+
+State of the integrator: ``y = [q, v, W_act, W_contact]``, and ``W_force`` after
+them when the model has force elements (``DynamicsModel.n_work`` accumulators:
+actuators, contact, force elements). A model without force elements keeps the
+two-accumulator state, so its error norms and step sequences are unchanged.
 
 Everything per-run lives in :class:`DynamicsWorkspace` (Pinocchio ``Data`` and
 caches); :class:`DynamicsModel` is immutable.
@@ -48,6 +59,7 @@ from robot.model import constraints as C
 from robot.model import redundancy as R
 from robot.dynamics import rhs_kernels as K
 from robot.model.mechanism import ClearanceSite, Mechanism
+from robot.dynamics.forces.force_set import BoundForces, ForceSet
 
 LWA = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
 
@@ -97,6 +109,17 @@ class DynamicsModel:
     drive: Drive
     baumgarte: Baumgarte = Baumgarte()
     end_effector_frame: int = -1
+    forces: ForceSet | None = None  # force elements and force-driven actuators (robot.dynamics.forces)
+
+    @property
+    def n_work(self) -> int:
+        """Work accumulators after ``[q, v]``: actuators, contact, and force elements when there are any."""
+        return 2 if self.forces is None else 3
+
+    @property
+    def state_size(self) -> int:
+        """Length of the integrator's state ``[q, v, W_act, W_contact(, W_force)]``."""
+        return self.nq + self.nv + self.n_work
 
     @property
     def n_candidates(self) -> int:
@@ -117,6 +140,7 @@ def make_dynamics_model(
     drive: Drive,
     baumgarte: Baumgarte = Baumgarte(),
     end_effector_frame: str | None = None,
+    forces: ForceSet | None = None,
 ) -> DynamicsModel:
     """Bind every clearance site of ``mechanism`` to its law in ``laws`` (by site name)."""
     missing = [s.name for s in mechanism.clearance_sites if s.name not in laws]
@@ -134,7 +158,7 @@ def make_dynamics_model(
         contacts.append(ContactSite(site, law, offset))
         offset += law.n_candidates
     ee = mechanism.frame_id(end_effector_frame or "platform")
-    return DynamicsModel(mechanism, C.constraint_set(mechanism, driven=True), tuple(contacts), drive, baumgarte, ee)
+    return DynamicsModel(mechanism, C.constraint_set(mechanism, driven=True), tuple(contacts), drive, baumgarte, ee, forces)
 
 
 @dataclass
@@ -150,6 +174,7 @@ class DynamicsWorkspace:
     compiled: "CompiledTerms | None" = None  # the compiled right-hand side's views, when it applies
     rows: R.RowSelection | None = None  # the rows the KKT solve uses (robot.model.redundancy), set on first solve
     rank_checks: int = 0  # redundancy detections after the first (a dropped row's check failed)
+    forces: BoundForces | None = None  # the force elements on ``data``, when the model has any
 
 
 def make_workspace(dynamics: DynamicsModel) -> DynamicsWorkspace:
@@ -163,6 +188,7 @@ def make_workspace(dynamics: DynamicsModel) -> DynamicsWorkspace:
         drive=drive_table(dynamics.drive),
         zero_tau=np.zeros(model.nv),
         compiled=CompiledTerms.for_dynamics(dynamics, data, kernel),
+        forces=None if dynamics.forces is None else dynamics.forces.bind(model, data),
     )
 
 
@@ -329,6 +355,10 @@ class DriveTable:
         drive = self.drive
         samples = np.array([np.concatenate(drive.drive(middle + half * x)) for x in self.nodes])
         m = samples.shape[1] // 3
+        if m == 0:  # no motion-driven actuator
+            segment = (middle, np.zeros((self.degree + 1, 0)), 0)
+            self.segments[k] = segment
+            return segment
         coefficients = np.linalg.solve(np.vander(self.nodes, self.degree + 1, increasing=True), samples)
         scale = np.abs(samples).reshape(len(self.nodes), 3, m).max(axis=(0, 2), initial=0.0)  # m = 0: no actuator
         ok = True
@@ -412,6 +442,8 @@ class Evaluation:
     residual_rate: np.ndarray
     contacts: list
     generalized_contact_force: np.ndarray
+    applied_force: np.ndarray | None = None  # Q of the force elements and force-driven actuators (None: none)
+    force_scalars: np.ndarray | None = None  # each element's scalar force or torque (ForceSet order)
 
     def driving_force(self, constraints: C.ConstraintSet) -> np.ndarray:
         return -self.multipliers[constraints.driving_rows]
@@ -461,8 +493,11 @@ def evaluate(
         contacts.append(result)
         if np.any(result.in_contact):
             views.add_generalized_force(model, data, result, tau)
-    qdd = solve_kkt(dynamics, workspace, tau, phi_q, -rhs).copy()
-    return Evaluation(qdd, -workspace.rows.full_multipliers(phi_q, data.lambda_c), phi, phi_dot, contacts, tau)
+    forces = workspace.forces
+    applied = None if forces is None else forces.evaluate(t, q, v).copy()
+    qdd = solve_kkt(dynamics, workspace, tau if applied is None else tau + applied, phi_q, -rhs).copy()
+    scalars = None if forces is None else forces.scalars.copy()
+    return Evaluation(qdd, -workspace.rows.full_multipliers(phi_q, data.lambda_c), phi, phi_dot, contacts, tau, applied, scalars)
 
 
 def solve_kkt(dynamics: DynamicsModel, workspace: DynamicsWorkspace, tau: np.ndarray, phi_q: np.ndarray, drift: np.ndarray) -> np.ndarray:
@@ -499,7 +534,7 @@ def state_derivative(
     y: np.ndarray,
     onset_rates: np.ndarray,
 ) -> np.ndarray:
-    """dy/dt of the simulation state ``y = [q, v, W_act, W_contact]`` (the integrator's right-hand side).
+    """dy/dt of the simulation state ``y = [q, v, W_act, W_contact(, W_force)]`` (the integrator's right-hand side).
 
     The same equations as :func:`evaluate` (plus :func:`configuration_rate` and the
     actuator and contact powers), on the hot path: quaternions normalised in a
@@ -539,13 +574,24 @@ def state_derivative(
                 if tau is None:
                     tau = np.zeros(nv)
                 views.add_generalized_force(model, data, result, tau)
-    out = np.empty(nq + nv + 2)
-    out[nq : nq + nv] = solve_kkt(dynamics, workspace, workspace.zero_tau if tau is None else tau, kernel.phi_q, drift)
+    out = np.empty(nq + nv + dynamics.n_work)
+    total = workspace.zero_tau if tau is None else tau
+    if workspace.forces is not None:
+        total = total + workspace.forces.evaluate(t, q, v)
+    out[nq : nq + nv] = solve_kkt(dynamics, workspace, total, kernel.phi_q, drift)
     out[:nq] = pin.tangentMapProduct(model, q, v[:, None])
     # actuator power: driving force (= Pinocchio's multiplier of the driving row) times the actuator rate
     out[nq + nv] = data.lambda_c[workspace.rows.n_closure_kept :] @ v[mechanism.actuator_v_index] if kernel.driven else 0.0
     out[nq + nv + 1] = 0.0 if tau is None else tau @ v
+    if workspace.forces is not None:
+        _add_force_powers(workspace.forces, out, nq + nv)
     return out
+
+
+def _add_force_powers(forces: BoundForces, out: np.ndarray, offset: int) -> None:
+    """Force-driven actuators' power into the actuator power, the elements' power into the force power."""
+    out[offset] += forces.powers[0]
+    out[offset + 2] = forces.powers[1]
 
 
 def _compiled_state_derivative(
@@ -588,11 +634,15 @@ def _compiled_state_derivative(
     tau = compiled.tau
     tau[:] = 0.0
     _compiled_sites(dynamics, workspace, compiled, t, v, onset_rates, tau)
-    out = np.empty(nq + nv + 2)
-    out[nq : nq + nv] = solve_kkt(dynamics, workspace, tau, compiled.phi_q, compiled.drift)
+    out = np.empty(nq + nv + dynamics.n_work)
+    # force elements: data.oMi and data.J are at q (computeJointJacobiansTimeVariation)
+    total = tau if workspace.forces is None else tau + workspace.forces.evaluate(t, q, v)
+    out[nq : nq + nv] = solve_kkt(dynamics, workspace, total, compiled.phi_q, compiled.drift)
     out[:nq] = pin.tangentMapProduct(model, q, v[:, None])
     # actuator power: driving force (= Pinocchio's multiplier of the driving row) times the actuator rate
     K.write_powers(data.lambda_c, workspace.rows.n_closure_kept, v, compiled.actuator_v, tau, out, nq + nv)
+    if workspace.forces is not None:
+        _add_force_powers(workspace.forces, out, nq + nv)
     return out
 
 

@@ -47,6 +47,15 @@ and the twists' change with ``q`` at fixed ``v``. ``tests/test_state_jacobian.py
 checks the stiff blocks against a central-difference Jacobian of ``f`` and the
 iteration matrix's quality (the Newton contraction) at the step sizes in use.
 
+Force elements (:mod:`robot.dynamics.forces`): loads that depend on t only
+(joint and body loads, force-driven actuators) leave the blocks above
+unchanged (their ``Q`` varies with q only through the Jacobians, a left-out
+geometric term) and add ``Q_act`` to the actuator power row and ``Q_elements`` to
+the force-work row (``d(Q . v)/dv``). Elements whose law depends on the state
+(springs, dampers: ``ForceSet.state_dependent``) are not linearised here:
+:func:`for_workspace` then returns None and the solver differences the
+right-hand side (exact to its difference step, whatever the elements).
+
 Applies on the compiled right-hand side with ``clearance_contact``'s own
 compiled laws (every shipped scene); elsewhere :func:`for_workspace` returns
 None and the solver builds its own finite-difference matrix.
@@ -71,7 +80,7 @@ class StateJacobian:
     """``df/dy`` of :func:`robot.dynamics.equations.state_derivative` on one workspace (module docstring).
 
     Call ``jacobian(t, y, onset_rates, out)`` to fill ``out`` (n x n, n =
-    nq + nv + 2). Uses (and overwrites) the workspace's Pinocchio data, as a
+    ``dynamics.state_size``). Uses (and overwrites) the workspace's Pinocchio data, as a
     right-hand side call does. Raises ``ContactError`` if a contact law refuses
     a perturbed input (callers fall back to finite differences).
     """
@@ -154,12 +163,17 @@ class StateJacobian:
             out[nq + nv, :nq] = -(rate @ lambda_by_xi[first:]) @ tangent_inverse
             out[nq + nv, nq : nq + nv] = -(rate @ lambda_by_v[first:])
             out[nq + nv, nq + actuator_v] += driving_multipliers
+        forces = workspace.forces
+        if forces is not None:  # time-only loads (module docstring): their powers' velocity derivatives
+            out[nq + nv, nq : nq + nv] += forces.from_actuators
+            out[nq + nv + 2, nq : nq + nv] = forces.from_elements
         return out
 
 
 def for_workspace(dynamics: D.DynamicsModel, workspace: D.DynamicsWorkspace) -> StateJacobian | None:
-    """The structured Jacobian on ``workspace``, or None where it does not apply (Python right-hand side)."""
-    if not _applies(workspace.compiled):
+    """The structured Jacobian on ``workspace``, or None where it does not apply (Python right-hand side,
+    state-dependent force elements)."""
+    if not _applies(workspace.compiled) or (dynamics.forces is not None and dynamics.forces.state_dependent):
         return None
     return StateJacobian(dynamics, workspace)
 

@@ -66,7 +66,7 @@ class LagrangeSystem:
         self.dynamics = dynamics
         self.mechanism = dynamics.mechanism
         self.nq, self.nv = dynamics.nq, dynamics.nv
-        self.size = self.nq + self.nv + 2
+        self.size = dynamics.state_size  # q, v and the work accumulators
         self.n_candidates = dynamics.n_candidates
         self.penetration_bounds = penetration_bounds
         self.workspace = D.make_workspace(dynamics)
@@ -146,9 +146,9 @@ def integrate(
     nq, nv = dynamics.nq, dynamics.nv
     y0 = np.asarray(y0, dtype=float)
     if y0.shape == (nq + nv,):
-        y0 = np.concatenate([y0, [0.0, 0.0]])  # work accumulators start at zero
-    if y0.shape != (nq + nv + 2,):
-        raise ValueError(f"y0 has shape {y0.shape}; expected ({nq + nv},) or ({nq + nv + 2},) for this model")
+        y0 = np.concatenate([y0, np.zeros(dynamics.n_work)])  # work accumulators start at zero
+    if y0.shape != (dynamics.state_size,):
+        raise ValueError(f"y0 has shape {y0.shape}; expected ({nq + nv},) or ({dynamics.state_size},) for this model")
     structured = options.jacobian == STRUCTURED and registry.traits(options.method).takes_jacobian
     system = LagrangeSystem(dynamics, penetration_bounds(dynamics, limits), structured_jacobian=structured)
     outputs = None if options.output_step is None else OutputTimes.grid(options.output_step)

@@ -11,16 +11,25 @@ in memory and loaded from a file alike.
 back and checks it.
 
 Arrays (n records): ``t``; ``q`` (n x nq), ``v`` (n x nv); ``driving_force``
-(n x n_actuators, N, positive = the actuator pushes); ``ee_position``,
+(n x motion-driven actuators; N on a prismatic joint, N m on a revolute one, positive
+in the direction of increasing coordinate: the actuator pushes); ``ee_position``,
 ``ee_velocity``, ``ee_acceleration`` (n x 3, world, of the end-effector frame
 origin); ``constraint_residual`` (n, max |Phi|); ``kinetic_energy``,
 ``potential_energy``, ``actuator_power``, ``contact_power``, ``actuator_work``,
-``contact_work`` (n; works integrated with the motion); ``record_kind`` (n, what
+``contact_work`` (n; works integrated with the motion: actuators, motion- and
+force-driven, and contact); with force elements (``robot.dynamics.forces``) also
+``force_work`` (n, their integrated work), ``force_energy`` (n, energy stored in them) and per
+element ``force_NAME`` (n, its scalar force, N, or torque, N m); ``record_kind`` (n, what
 each record is, below); ``onset_rates`` (n x candidates, the Lankarani-Nikravesh
 approach rate in use at each record); per clearance joint
-J: ``J_eccentricity`` (n x 3 spherical; n x 2 x 3 revolute, top and bottom ring),
+J: ``J_eccentricity`` (n x 3 spherical; n x 2 x 3 revolute, top and bottom ring;
+n x 2 x 3 translational, front and rear end of the slider), ``J_centre_in_outer``
+(n x 3, the ball / journal / slider centre in the socket / bearing / guide frame),
 ``J_penetration``, ``J_normal_force``, ``J_friction_force`` (magnitude),
-``J_kind`` (n x candidates). With contact events also ``event_t``,
+``J_kind`` (n x candidates), and per group of candidates of the type
+(``ClearanceJoint.FORCE_GROUPS``) the magnitude of the resultant normal force:
+``J_radial_force`` (spherical, revolute), ``J_axial_force`` (revolute),
+``J_lateral_force`` (translational). With contact events also ``event_t``,
 ``event_candidate``, ``event_is_onset``, ``event_kind`` (the record kind each
 event wrote: 1 onset, 2 penetration maximum, 5 force maximum) and ``event_value``
 (the event log: onsets with their approach rate, penetration maxima with their
@@ -239,6 +248,8 @@ def compute_outputs(dynamics: D.DynamicsModel, trajectory: Trajectory, output: O
         "actuator_work": y[:, nq + nv],
         "contact_work": y[:, nq + nv + 1],
     }
+    if dynamics.forces is not None:
+        out["force_work"] = y[:, nq + nv + 2]  # the force elements' (the force-driven actuators' is in actuator_work)
     out.update(derived_outputs(dynamics, t, y, onset))
     return out
 

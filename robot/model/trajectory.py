@@ -86,14 +86,16 @@ class PlatformTrajectory:
 
 @dataclass(frozen=True, eq=False)
 class JointTrajectory:
-    """Actuated joint coordinates prescribed directly, one :class:`FourierCoordinate` each."""
+    """Actuated joint coordinates prescribed directly, one time function each (:mod:`robot.model.time_functions`:
+    a :class:`FourierCoordinate` through ``time_functions.Fourier``, a polynomial, a spline through a table...).
 
-    period: float
-    coordinates: tuple[FourierCoordinate, ...]
+    No functions (a mechanism without motion-driven actuators): empty arrays.
+    """
+
+    functions: tuple
 
     def drive(self, t: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        omega = 2.0 * math.pi / self.period
-        values = np.array([c.evaluate(t, omega) for c in self.coordinates], dtype=float).reshape(-1, 3)  # (0, 3): no actuator
+        values = np.array([f.evaluate(t) for f in self.functions], dtype=float).reshape(len(self.functions), 3)
         return values[:, 0], values[:, 1], values[:, 2]
 
 

@@ -23,12 +23,33 @@ Schema (defaults in brackets)::
     duration = 2.0                       # s
     gravity = [0.0, 0.0, -9.81]          # m/s^2, world axes [default]
 
-    [trajectory]
+    [trajectory]                         # prescribed motion (none: no table, or type = "joints" and no entries)
     type = "platform"                    # "platform" (pose through IK) or "joints"
     preset = "reference"                 # platform: the reference motion of robot.trajectory
     period = 1.0                         # s
     # platform, instead of preset: x, z, roll, pitch, yaw = {offset, amplitudes, harmonics, phases}
-    # joints: one table per actuated joint: P1 = {offset, rate, amplitudes, harmonics, phases}
+    # joints: one table per motion-driven actuator (rad or m), by `function`:
+    #   P1 = {offset, rate, amplitudes, harmonics, phases}   # no function (or "fourier"): Fourier series of `period`
+    #   P1 = {function = "constant_rate", offset, rate}      # or "constant" {value}, "polynomial" {coefficients}
+    #   P1 = {function = "harmonic", amplitude, frequency, phase, offset}   # Hz, rad
+    #   P1 = {function = "tabulated", file = "motion.csv"}   # CSV: time, value (relative to this file;
+    #        or time = [...], value = [...]); cubic spline: value, rate, acceleration; must cover [0, duration]
+
+    [actuators]        # per actuated joint (default: every URDF <transmission> joint, mode "motion")
+    P1 = {mode = "motion"}               # prescribed motion from [trajectory] (driving constraint)
+    P2 = {mode = "force", function = "harmonic", amplitude = 5.0, frequency = 2.0}  # prescribed
+                                         # generalized force (N, prismatic; N m, revolute), the joint free;
+                                         # function keys as in [trajectory] joints (robot.scene.values)
+    P3 = {mode = "none"}                 # not actuated: the joint is free
+    # any 1-dof joint may be listed (also one without a transmission)
+
+    [[force]]          # force elements (robot.dynamics.forces; one table each, outputs force_<name>)
+    name = "spring"    # unique [<type>_<index>]
+    type = "spring_damper"   # link_a, xyz_a, link_b (or "world"), xyz_b, stiffness + free_length
+                             # or length = [...] + force = [...], damping, actuator_force
+    # "joint_spring_damper": joint, stiffness, rest_position, damping
+    # "joint_torque" (revolute) / "joint_force" (prismatic): joint + a time function (function = ...)
+    # "body_force": link, xyz, direction (world) + a time function; "body_torque": link, axis + function
 
     [solver]   method ["RK45"], rtol [1e-7], atol [1e-9], max_step [1e-3], first_step,
                jacobian ["structured"] (implicit methods' Newton matrix; or "finite-difference")
@@ -44,10 +65,12 @@ Schema (defaults in brackets)::
     material = "steel" # or outer_material / inner_material
     restitution = 0.9
     friction = {law = "brown_mcphee", static = 0.07, dynamic = 0.05, transition_velocity = 5e-3}
-    # the type's own keys (its SCENE_KEYS, numbers):
-    # spherical: ball_radius, clearance, exponent [1.5], stiffness [Hertz]
+    # the type's own keys (its SCENE_KEYS: numbers, and names for its NAME_KEYS):
+    # spherical: ball_radius, clearance, exponent [1.5], stiffness [Hertz], dissipation
     # revolute: journal_radius, radial_clearance, bearing_outer_radius, bearing_length,
-    #           axial_clearance, radial_exponent, axial_exponent, point_exponent, *_stiffness
+    #           axial_clearance, radial_exponent, axial_exponent, point_exponent, *_stiffness,
+    #           radial_law ["linear"; or "johnson", "pereira", "hertz_point"], dissipation
+    # both: dissipation ["lankarani_nikravesh"; or "hunt_crossley", "gonthier", "flores", "hu_guo"]
 
     [initial]
     misalignment_deg = { R1 = -0.035 }   # revolute clearance joints: bearing rotated about its
@@ -89,7 +112,7 @@ from clearance_contact.registry import COMMON_SCENE_KEYS
 from robot.data import shipped_urdf
 from robot.errors import MechanismFileError, SceneError
 from robot.io.array_names import result_array_names
-from robot.model.description import parse_mechanism
+from robot.model.description import CLEARANCE_TREE_KINDS, parse_mechanism
 from robot.scene.overrides import apply_overrides
 from robot.dynamics.baumgarte import Baumgarte
 from robot.integration.options import STRUCTURED, FailureLimits, SolverOptions
@@ -97,7 +120,7 @@ from robot.integration.solvers import FIXED_STEP_METHODS, METHODS
 
 SCENE_DIR = Path(__file__).resolve().parent / "scenes"
 
-_TOP_KEYS = {"name", "description", "mechanism", "end_effector", "duration", "gravity", "trajectory", "solver", "baumgarte", "limits", "materials", "clearance", "initial", "output", "extends"}
+_TOP_KEYS = {"name", "description", "mechanism", "end_effector", "duration", "gravity", "trajectory", "solver", "baumgarte", "limits", "materials", "clearance", "initial", "output", "extends", "force", "actuators"}
 _OUTPUT_KEYS = {"step", "keep", "precision"}
 PRECISIONS = ("float64", "float32")
 #: prefix of a shipped mechanism file in a scene's ``mechanism`` key
@@ -130,6 +153,8 @@ class TrajectorySpec:
     period: float
     preset: str | None
     coordinates: dict[str, dict]
+    #: joints: per joint a time function (robot.model.time_functions) when the table names a `function`
+    functions: dict[str, Any] = field(default_factory=dict)
 
 
 @dataclass(frozen=True)
@@ -175,6 +200,8 @@ class Scene:
     initial_positions: dict[str, float] = field(default_factory=dict)
     initial_velocities: dict[str, float] = field(default_factory=dict)
     output: OutputSpec = field(default_factory=OutputSpec)
+    forces: tuple = field(default_factory=tuple)  # robot.scene.forces.ForceSpec per [[force]] table
+    actuators: dict = field(default_factory=dict)  # joint -> robot.scene.forces.ActuatorSpec
     #: the scene's TOML document as resolved (``extends`` merged, overrides applied)
     document: dict[str, Any] = field(default_factory=dict, compare=False, repr=False)
     #: the folder that relative paths of the document are relative to
@@ -277,6 +304,14 @@ def _number(table: dict, key: str, where: str, default=None, *, low=-math.inf, h
     return float(value)
 
 
+def _name(table: dict, key: str, where: str) -> str:
+    """The text value of ``key`` (a model's name: whether it is a known one is for its registry to say)."""
+    value = table[key]
+    if not isinstance(value, str) or not value:
+        raise SceneError(f"{where}: {key}={value!r} must be a name (a non-empty string)", key=key, value=value)
+    return value
+
+
 def _table(data: dict, key: str, where: str) -> dict:
     value = data.get(key, {})
     if not isinstance(value, dict):
@@ -348,10 +383,16 @@ def _clearance(table: Any, index: int, materials: dict[str, Material], where: st
     outer, inner = material("outer_material"), material("inner_material")
     restitution = _number(table, "restitution", w, 0.9)
     for key in law_type.REQUIRED_KEYS:
-        _number(table, key, w, required=True)
-    # dimensions (the type's GEOMETRY_KEYS) are positive: checked here, under the user's key names
+        if key not in table:
+            raise SceneError(f"{w}: missing required key {key!r}", key=key)
+    # dimensions (the type's GEOMETRY_KEYS) are positive: checked here, under the user's key names;
+    # NAME_KEYS are names of models (the joint checks a name against its registry)
     positive = {"low": 0.0, "low_open": True}
-    parameters = {key: _number(table, key, w, **(positive if key in law_type.GEOMETRY_KEYS else {})) for key in law_type.SCENE_KEYS if key in table}
+    parameters = {
+        key: _name(table, key, w) if key in law_type.NAME_KEYS else _number(table, key, w, **(positive if key in law_type.GEOMETRY_KEYS else {}))
+        for key in law_type.SCENE_KEYS
+        if key in table
+    }
     try:
         friction = _friction(table.get("friction"), f"{w} friction")
         law = law_type.from_scene(parameters, outer, inner, restitution, friction)
@@ -374,8 +415,8 @@ def _check_site_kinds(clearances: tuple[ClearanceSpec, ...], mechanism_path: Pat
         return
     kinds = {c.name: (c.kind, "closure") for c in description.closures}
     for name, joint in description.joints.items():
-        if joint.kind in ("revolute", "continuous"):  # a tree joint with clearance becomes a free joint
-            kinds.setdefault(name, ("revolute", "joint"))
+        if joint.kind in CLEARANCE_TREE_KINDS:  # a tree joint with clearance becomes a free joint
+            kinds.setdefault(name, (CLEARANCE_TREE_KINDS[joint.kind], "joint"))
     for spec in clearances:
         if spec.joint not in kinds:
             continue
@@ -410,7 +451,7 @@ def resolve_mechanism(mechanism: Any, base_dir: Path, where: str) -> Path:
     return candidate
 
 
-def _output(table: dict, clearance_joints: list[str], where: str) -> OutputSpec:
+def _output(table: dict, clearance_joints: dict[str, tuple[str, ...]], where: str) -> OutputSpec:
     w = f"{where} [output]"
     _unknown(table, _OUTPUT_KEYS, w)
     step = _number(table, "step", w, DEFAULT_OUTPUT_STEP, low=0.0) or None
@@ -476,9 +517,9 @@ def admissible_misalignment(law: Any, sign: float = 1.0, tolerance_deg: float = 
     return low
 
 
-def _trajectory(table: dict, where: str) -> TrajectorySpec:
+def _trajectory(table: dict, where: str, base_dir: Path | None = None) -> TrajectorySpec:
     w = f"{where} [trajectory]"
-    kind = table.get("type", "platform")
+    kind = table.get("type", "platform" if table else "joints")  # no table: no prescribed motion
     if kind not in ("platform", "joints"):
         raise SceneError(f"{w}: type={kind!r} must be 'platform' or 'joints'", key="type", value=kind)
     period = _number(table, "period", w, 1.0, low=0.0, low_open=True)
@@ -494,14 +535,20 @@ def _trajectory(table: dict, where: str) -> TrajectorySpec:
             raise SceneError(f"{w}: a platform trajectory needs preset = 'reference' or all of {', '.join(POSE_COORDINATES)}")
     elif preset is not None:
         raise SceneError(f"{w}: preset is only for platform trajectories")
+    functions = {}
     for name, coordinate in coordinates.items():
         if not isinstance(coordinate, dict):
             raise SceneError(f"{w}: {name} must be a table {{offset, rate, amplitudes, harmonics, phases}}")
-        _unknown(coordinate, _COORDINATE_KEYS, f"{w} {name}")
+        if kind == "joints" and coordinate.get("function", "fourier") != "fourier":
+            from robot.scene.values import time_function  # imports this module: import on use
+
+            functions[name] = time_function(coordinate, f"{w} {name}", base_dir)
+            continue
+        _unknown(coordinate, _COORDINATE_KEYS | ({"function"} if kind == "joints" else set()), f"{w} {name}")
         lengths = {len(coordinate.get(k, [])) for k in ("amplitudes", "harmonics", "phases")}
         if len(lengths) > 1:
             raise SceneError(f"{w} {name}: amplitudes, harmonics and phases must have the same length")
-    return TrajectorySpec(kind, period, preset, coordinates)
+    return TrajectorySpec(kind, period, preset, coordinates, functions)
 
 
 def load_scene(name_or_path: str | Path, overrides: Mapping[str, Any] | None = None, **top_level: Any) -> Scene:
@@ -573,9 +620,15 @@ def scene_from_document(data: dict[str, Any], path: Path, base_dir: Path) -> Sce
     _check_site_kinds(clearances, mechanism_path, where)
     initial = _table(data, "initial", where)
     misalignment = _misalignment(initial, clearances, where)
-    output = _output(_table(data, "output", where), joints, where)
+    output = _output(_table(data, "output", where), {c.joint: c.law.result_keys() for c in clearances}, where)
     if output.step is not None:
         solver = dataclasses.replace(solver, output_step=output.step)
+    duration = _number(data, "duration", where, required=True, low=0.0, low_open=True)
+    trajectory = _trajectory(_table(data, "trajectory", where), where, base_dir)
+    from robot.scene import forces as F  # imports this module: import on use
+
+    forces, actuators = F.force_specs(data, where, base_dir), F.actuator_specs(_table(data, "actuators", where), where, base_dir)
+    F.check_time_tables(trajectory, actuators, forces, duration, where)
     end_effector = data.get("end_effector", "platform")
     if not isinstance(end_effector, str):
         raise SceneError(f"{where}: end_effector={end_effector!r} must be a frame name", key="end_effector", value=end_effector)
@@ -585,14 +638,16 @@ def scene_from_document(data: dict[str, Any], path: Path, base_dir: Path) -> Sce
         description=str(data.get("description", "")),
         mechanism_path=mechanism_path,
         end_effector=end_effector,
-        duration=_number(data, "duration", where, required=True, low=0.0, low_open=True),
-        trajectory=_trajectory(_table(data, "trajectory", where), where),
+        duration=duration,
+        trajectory=trajectory,
         solver=solver,
         baumgarte=baumgarte,
         limits=limits,
         clearances=clearances,
         misalignment_deg=misalignment,
         output=output,
+        forces=forces,
+        actuators=actuators,
         document=document,
         base_dir=base_dir,
         gravity=_gravity(data, where),

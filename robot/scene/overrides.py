@@ -4,7 +4,8 @@ A key path names a value of the scene's TOML document: ``duration``,
 ``solver.rtol``, ``trajectory.period``, ``materials.steel.youngs_modulus``.
 Entries of the ``[[clearance]]`` array are addressed by their ``joint`` name
 (``clearance.R1.radial_clearance``, ``clearance.S1.friction.dynamic``) or by
-their index (``clearance.0.restitution``). Setting a key that the scene does not
+their index (``clearance.0.restitution``); ``[[force]]`` entries by their ``name``
+(``force.tip_spring.stiffness``). Setting a key that the scene does not
 have yet creates it (the validation that follows rejects keys that do not
 exist in the schema, naming them); a path through a value that is not a table
 is refused here, naming the path.
@@ -22,7 +23,7 @@ from typing import Any, Mapping
 from robot.errors import SceneError
 
 #: arrays of tables whose entries are addressed by this key (or by index)
-ARRAY_ENTRY_KEYS = {"clearance": "joint"}
+ARRAY_ENTRY_KEYS = {"clearance": "joint", "force": "name"}
 
 
 def _array_entry(entries: list, name: str, path: str, array: str) -> dict:
@@ -59,6 +60,26 @@ def _container(document: dict, parts: list[str], path: str) -> dict:
             where = ".".join(parts[: i + 1])
             raise SceneError(f"override {path!r}: {where} is {child!r}, not a table", key=path, value=child)
         node = child
+        i += 1
+    return node
+
+
+def document_value(document: Mapping[str, Any], path: str) -> Any:
+    """The value at key path ``path`` of a scene document (``[[clearance]]`` entries by joint name or index).
+
+    SceneError naming the path if the document has no such key.
+    """
+    node: Any = document
+    parts = path.split(".")
+    i = 0
+    while i < len(parts):
+        part = parts[i]
+        if not isinstance(node, dict) or part not in node:
+            raise SceneError(f"key path {path!r}: the scene has no key {'.'.join(parts[: i + 1])!r}", key=path, value=None)
+        node = node[part]
+        if isinstance(node, list) and part in ARRAY_ENTRY_KEYS and i + 1 < len(parts):
+            node = _array_entry(node, parts[i + 1], path, part)
+            i += 1
         i += 1
     return node
 

@@ -120,7 +120,7 @@ class ElementSizes:
     kind: str
     values: dict[str, float]
     source: str = "default"
-    parameters: dict[str, float] = field(default_factory=dict)
+    parameters: dict[str, float | str] = field(default_factory=dict)
 
     @property
     def joint_type(self) -> type[ClearanceJoint]:
@@ -290,7 +290,11 @@ def clearance_sizes(mechanism: Mechanism, result: SimulationResult) -> tuple[dic
                 notes.append(f"{site.name}: {key} {value:.4g} m taken from the result data (source said {values[key]:.4g} m)")
                 values[key] = value
                 origin = f"{origin}; {key} from result data"
-        parameters = {key: float(value) for key, value in recorded.get(site.name, {}).items() if key in law_type.SCENE_KEYS and key not in values}
+        parameters = {
+            key: value if key in law_type.NAME_KEYS else float(value)  # names of models stay text
+            for key, value in recorded.get(site.name, {}).items()
+            if key in law_type.SCENE_KEYS and key not in values
+        }
         sizes[site.name] = ElementSizes(law_type.type_name, values, source=origin, parameters=parameters)
     return sizes, notes
 
@@ -357,10 +361,12 @@ def sample_frames(mechanism: Mechanism, result: SimulationResult, options: Anima
 # --------------------------------------------------------------------------- geometry helpers
 
 
-def _exaggerated_inner(outer: pin.SE3, inner: pin.SE3, tilt_too: bool, k: float) -> pin.SE3:
-    """Drawn pose of the inner element: displacement from the outer centre times k (and axis tilt if ``tilt_too``)."""
-    position = outer.translation + k * (inner.translation - outer.translation)
-    if not tilt_too or k == 1.0:
+def _exaggerated_inner(outer: pin.SE3, inner: pin.SE3, law_type: type[ClearanceJoint], k: float) -> pin.SE3:
+    """Drawn pose of the inner element: offset from the outer centre magnified by the type
+    (``exaggerated_offset``: times k), and axis tilt if ``EXAGGERATE_TILT``."""
+    offset = law_type.exaggerated_offset(outer.rotation.T @ (inner.translation - outer.translation), k)
+    position = outer.translation + outer.rotation @ offset
+    if not law_type.EXAGGERATE_TILT or k == 1.0:
         return pin.SE3(inner.rotation, position)
     relative = outer.rotation.T @ inner.rotation
     z = relative[:, 2]
@@ -557,8 +563,8 @@ def build_scene(vis, mechanism: Mechanism, result: SimulationResult, options: An
             size = sizes[site.name]
             base = f"{ROOT}/clearance/{site.name}"
             outer, inner = data.oMf[site.outer_frame], data.oMf[site.inner_frame]
-            drawn = _exaggerated_inner(outer, inner, size.joint_type.EXAGGERATE_TILT, k)
-            trails[site.name].append(k * outer.rotation.T @ (inner.translation - outer.translation))
+            drawn = _exaggerated_inner(outer, inner, size.joint_type, k)
+            trails[site.name].append(size.joint_type.exaggerated_offset(outer.rotation.T @ (inner.translation - outer.translation), k))
             for part, pose in (("outer", outer), ("inner", drawn)):
                 frame[f"{base}/{part}"].set_transform(pose.homogeneous)
                 if index == 0:

@@ -56,14 +56,27 @@ def reference_state_derivative(dynamics: D.DynamicsModel, data: pin.Data, t: flo
         if np.any(result.in_contact):
             tau += pin.getFrameJacobian(model, data, site.outer_frame, LWA).T @ result.wrench_outer
             tau += pin.getFrameJacobian(model, data, site.inner_frame, LWA).T @ result.wrench_inner
-    qdd = pin.forwardDynamics(model, data, tau, phi_q, -rhs).copy()
+    applied = np.zeros(nv) if dynamics.forces is None else dynamics.forces.bind(model, data).evaluate(t, q, v)
+    qdd = pin.forwardDynamics(model, data, tau + applied, phi_q, -rhs).copy()
     multipliers = -data.lambda_c.copy()
     driving_force = -multipliers[constraints.driving_rows]
-    out = np.empty(nq + nv + 2)
+    actuator = np.zeros(nv) if dynamics.forces is None else sum((_element_force(e, model, data, t, q, v) for e in dynamics.forces.elements if e.actuator), np.zeros(nv))
+    out = np.empty(dynamics.state_size)
     out[:nq] = pin.tangentMap(model, q) @ v
     out[nq : nq + nv] = qdd
-    out[nq + nv] = driving_force @ v[mechanism.actuator_v_index]
+    out[nq + nv] = driving_force @ v[mechanism.actuator_v_index] + actuator @ v
     out[nq + nv + 1] = tau @ v
+    if dynamics.forces is not None:
+        out[nq + nv + 2] = (applied - actuator) @ v
+    return out
+
+
+def _element_force(element, model: pin.Model, data: pin.Data, t: float, q: np.ndarray, v: np.ndarray) -> np.ndarray:
+    """One force element's generalized force on its own (the oracle separates actuator work from element work)."""
+    from robot.dynamics.forces.kinematics import PointKinematics
+
+    out = np.zeros(model.nv)
+    element.apply(PointKinematics(model, data), t, q, v, out)
     return out
 
 
@@ -76,7 +89,7 @@ def sample_states(run: Run, t_end: float = 0.02) -> dict:
     force to speak of.
     """
     dynamics = run.dynamics
-    y0 = np.concatenate([run.y0, [0.0, 0.0]])  # work accumulators start at zero
+    y0 = np.concatenate([run.y0, np.zeros(dynamics.n_work)])  # work accumulators start at zero
     states = {"initial": (0.0, y0, initial_onset_rates(dynamics))}
     if not dynamics.contacts:
         return states

@@ -1,0 +1,68 @@
+"""The force elements of one run and their evaluation on a workspace's ``pin.Data``.
+
+:class:`ForceSet` (immutable, on the :class:`robot.dynamics.equations.DynamicsModel`)
+holds the elements a scene declares (and the force-driven actuators);
+:meth:`ForceSet.bind` gives the per-workspace :class:`BoundForces` with its
+buffers. ``BoundForces.evaluate(t, q, v)`` returns the total generalized force
+``Q = Q_elements + Q_actuators`` (nv) added to the right-hand side of the KKT
+system, and fills ``powers = [Q_actuators . v, Q_elements . v]``: the first is
+integrated with the actuator work, the second as the force-element work
+(``force_work``). A scene without elements has no ``ForceSet`` at all (the
+right-hand side then does no extra work).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import pinocchio as pin
+
+from robot.dynamics.forces.base import ForceElement
+from robot.dynamics.forces.kinematics import PointKinematics
+
+
+@dataclass(frozen=True, eq=False)
+class ForceSet:
+    elements: tuple[ForceElement, ...]
+
+    @property
+    def names(self) -> tuple[str, ...]:
+        return tuple(e.name for e in self.elements)
+
+    @property
+    def state_dependent(self) -> bool:
+        """True if an element's law depends on (q, v) (springs, dampers), not only on t."""
+        return any(e.state_dependent for e in self.elements)
+
+    def bind(self, model: pin.Model, data: pin.Data) -> "BoundForces":
+        return BoundForces(self, model, data)
+
+
+class BoundForces:
+    """A :class:`ForceSet` on one ``pin.Data`` (needs ``data.oMi`` and ``data.J`` at q: see ``kinematics.py``)."""
+
+    def __init__(self, force_set: ForceSet, model: pin.Model, data: pin.Data):
+        self.elements = force_set.elements
+        self.kinematics = PointKinematics(model, data)
+        self.total = np.zeros(model.nv)
+        self.from_elements = np.zeros(model.nv)
+        self.from_actuators = np.zeros(model.nv)
+        self.scalars = np.zeros(len(self.elements))  # each element's scalar force or torque at the last call
+        self.powers = np.zeros(2)  # [actuator power, element power] at the last call
+
+    def evaluate(self, t: float, q: np.ndarray, v: np.ndarray) -> np.ndarray:
+        """``Q(q, v, t)`` (a buffer, overwritten by the next call); ``scalars`` and ``powers`` updated."""
+        self.from_elements[:] = 0.0
+        self.from_actuators[:] = 0.0
+        kinematics = self.kinematics
+        for index, element in enumerate(self.elements):
+            self.scalars[index] = element.apply(kinematics, t, q, v, self.from_actuators if element.actuator else self.from_elements)
+        self.powers[0] = self.from_actuators @ v
+        self.powers[1] = self.from_elements @ v
+        np.add(self.from_elements, self.from_actuators, out=self.total)
+        return self.total
+
+    def potential_energy(self, q: np.ndarray) -> float:
+        """Energy stored in the elements at q (same kinematics requirement)."""
+        return float(sum(e.potential_energy(self.kinematics, q) for e in self.elements))

@@ -1,0 +1,283 @@
+"""Running a sweep on dask.distributed: a local cluster or an existing scheduler.
+
+The driver (this module) loads and validates the sweep, creates or reopens the
+store, starts the workers (a ``LocalCluster`` of ``--workers`` processes with
+one thread each and single-threaded BLAS, or ``Client(ADDRESS)`` of a running
+scheduler: dask-jobqueue, dask-kubernetes, ``dask scheduler`` + ``dask
+worker``), probes one run on every worker (which learns the arrays' shapes and
+warms the compiled kernels), submits every run that is not yet done and follows
+them with a progress bar. Workers write their runs into the store themselves,
+so the store must be reachable from every worker (a shared filesystem path).
+
+Resuming: runs whose stored ``run_key`` equals the key of their resolved scene
+and whose ``done`` flag is set are skipped; failed runs are redone only with
+``retry_failed``. A store written by a sweep of another layout (other axes,
+values or outputs) is refused unless ``overwrite``.
+"""
+
+from __future__ import annotations
+
+import logging
+import os
+import sys
+import time
+from contextlib import contextmanager
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, Iterator
+
+import numpy as np
+
+from robot.sweep.errors import SweepError
+from robot.sweep.spec import SweepSpec
+from robot.sweep.store import PACKED, Layout, Variable, create_store, existing_layout_key, finished_runs, remove_store, write_run, COUNTS, TIMING
+from robot.sweep.task import RunTask, execute, probe, resolve_parameters
+
+#: environment of every local worker: one thread for every numeric library (processes give the parallelism)
+SINGLE_THREADED = {"OMP_NUM_THREADS": "1", "OPENBLAS_NUM_THREADS": "1", "MKL_NUM_THREADS": "1", "NUMBA_NUM_THREADS": "1"}
+
+
+@dataclass
+class SweepOutcome:
+    """What a sweep did: runs in total, skipped (already done), run now, failed (stored), the store."""
+
+    store: Path
+    total: int
+    skipped: int = 0
+    ran: int = 0
+    #: failed runs in the whole store (this execution's and earlier ones), by cause
+    causes: dict[str, int] = field(default_factory=dict)
+    wall_time: float = 0.0
+    #: seconds from the first submission to the last run's completion (no cluster start, no probe)
+    run_phase_time: float = 0.0
+    #: the workers' summaries of the runs made now (status, cause, wall and integration times)
+    summaries: list[dict[str, Any]] = field(default_factory=list)
+
+    @property
+    def failed(self) -> int:
+        return sum(self.causes.values())
+
+    @property
+    def exit_code(self) -> int:
+        """0: every run reached its end; 1: some runs failed (recorded with their cause)."""
+        return 1 if self.failed else 0
+
+    def __str__(self) -> str:
+        causes = ", ".join(f"{n} {cause}" for cause, n in sorted(self.causes.items()))
+        return (
+            f"sweep: {self.total} runs ({self.skipped} already done, {self.ran} run now, {self.total - self.failed} ok, "
+            f"{self.failed} failed{': ' + causes if causes else ''}) in {self.wall_time:.1f} s; store {self.store}"
+        )
+
+
+def make_tasks(spec: SweepSpec) -> list[RunTask]:
+    base_dir = str(spec.base.base_dir)
+    return [
+        RunTask(i, spec.design.index(i), key, scene.document, str(scene.path), base_dir, spec.analyses, spec.keep)
+        for i, (scene, key) in enumerate(zip(spec.scenes, spec.run_keys))
+    ]
+
+
+def _field_sizes(fields, shapes: dict[str, tuple[int, ...]], spec, selectors: dict) -> dict[str, int]:
+    sizes: dict[str, int] = {}
+    for f in fields:
+        if f.name not in selectors:
+            continue
+        shape = shapes[selectors[f.name].text]
+        if len(shape) != len(f.dims):
+            raise SweepError(
+                f"analysis {spec.label!r}: input {f.name} = {selectors[f.name].text!r} has shape (records, ...) {shape}, the analysis needs dims {f.dims}",
+                key=f"{spec.label}.{f.name}",
+                value=selectors[f.name].text,
+            )
+        sizes.update({d: n for d, n in zip(f.dims, shape) if d != "time"})
+    return sizes
+
+
+def plan_layout(spec: SweepSpec, path: Path, shapes: dict[str, tuple[int, ...]]) -> Layout:
+    """Names, dimensions and sizes of every stored output (from the probe's signal shapes)."""
+    from robot.analysis import ANALYSES, AnalysisError
+
+    statistics, series, kept = [], {}, {}
+    first = spec.scenes[0].document
+    for a in spec.analyses:
+        analysis = ANALYSES[a.name]
+        sizes = _field_sizes(analysis.inputs, shapes, a, a.inputs)
+        try:
+            output_shapes = analysis.output_shapes({"time": 0, **sizes}, **resolve_parameters(a, first))
+        except (AnalysisError, TypeError, ValueError) as exc:
+            raise SweepError(f"analysis {a.label!r}: {exc}", key=a.label, value=a.parameters) from None
+        for f in analysis.outputs:
+            if "time" in f.dims:
+                continue  # per-record outputs vary in length: keep the signal instead ([keep])
+            name = f"{a.label}_{f.name}"
+            if not f.dims:
+                statistics.append(name)
+            else:
+                series[name] = Variable(tuple(f"{a.label}_{d}" for d in f.dims), output_shapes[f.name])
+    if spec.keep is not None:
+        for selector in spec.keep.arrays:
+            extra = shapes[selector.text][1:]
+            kept[selector.name] = Variable(("time", *(f"{selector.name}_dim{i + 1}" for i in range(len(extra)))), (spec.keep.samples, *extra))
+    names = [*statistics, *series, *kept, *COUNTS, *TIMING, *spec.design.coords]
+    clash = sorted({n for n in names if names.count(n) > 1} | (set(names) & {"run_key", "done", "status", "cause", "message", "t_reached", *PACKED, *PACKED.values()}))
+    if clash:
+        raise SweepError(f"sweep {spec.name}: output name(s) {clash} are used twice; change a label or an axis name", key="label", value=clash[0])
+    return Layout(str(path), spec.design.dims, spec.design.shape, tuple(statistics), series, kept)
+
+
+def store_attrs(spec: SweepSpec) -> dict[str, Any]:
+    return {
+        "sweep": spec.name,
+        "layout_key": spec.layout_key,
+        "design": spec.design.kind,
+        "scene": spec.base.name,
+        "t_end": spec.t_end,
+        "axes": {a.name: a.key for a in spec.axes},
+        "coordinates": list(spec.design.coords),
+        "overrides": {k: v for k, v in spec.overrides.items()},
+        "analyses": [a.canonical() for a in spec.analyses],
+        "sweep_file": str(spec.path) if spec.path else None,
+    }
+
+
+@contextmanager
+def dask_client(scheduler: str | None, workers: int | None) -> Iterator[Any]:
+    """A client of the scheduler at ``scheduler``, or of a local cluster of ``workers`` processes."""
+    import dask
+    from distributed import Client, LocalCluster
+
+    if scheduler is not None:
+        with Client(scheduler, timeout="30s") as client:
+            yield client
+        return
+    n = workers or os.cpu_count() or 1
+    environ = {**dask.config.get("distributed.nanny.pre-spawn-environ", {}), **SINGLE_THREADED}
+    with dask.config.set({"distributed.nanny.pre-spawn-environ": environ, "distributed.worker.daemon": False}):
+        with LocalCluster(n_workers=n, threads_per_worker=1, processes=True, dashboard_address=None, silence_logs=logging.ERROR) as cluster:
+            with Client(cluster) as client:
+                yield client
+
+
+def _todo(spec: SweepSpec, path: Path, retry_failed: bool) -> list[int]:
+    import zarr
+
+    done, keys = finished_runs(path)
+    status = np.asarray(zarr.open_group(str(path), mode="r")["status"][...]).ravel()
+    expected = np.array(spec.run_keys, dtype=object)
+    valid = done & (keys == expected)
+    if retry_failed:
+        valid &= status == 0
+    return [i for i in range(spec.design.size) if not valid[i]]
+
+
+def _prepare_store(spec: SweepSpec, path: Path, client, tasks: list[RunTask]) -> Layout:
+    """Probe the first run on every worker (warm-up; the arrays' shapes), then create the store."""
+    try:
+        probes = client.run(probe, tasks[0])
+    except SweepError:
+        raise
+    except Exception as exc:
+        raise SweepError(f"sweep {spec.name}: the probe run of the first point failed: {type(exc).__name__}: {exc}", key="probe", value=spec.design.points[0]) from None
+    shapes = next(iter(probes.values()))["shapes"]
+    layout = plan_layout(spec, path, shapes)
+    create_store(layout, spec.design.coords, store_attrs(spec))
+    return layout
+
+
+def _layout_of_store(spec: SweepSpec, path: Path) -> Layout:
+    import zarr
+
+    group = zarr.open_group(str(path), mode="r")
+    statistics = tuple(str(n) for n in group["statistic"][...])
+    fixed = {"run_key", "done", "status", "cause", "message", "t_reached", *PACKED, *PACKED.values(), *spec.design.coords}
+    series, kept = {}, {}
+    kept_names = {s.name for s in spec.keep.arrays} if spec.keep else set()
+    for name in group.array_keys():
+        if name in fixed:
+            continue
+        array = group[name]
+        variable = Variable(tuple(array.metadata.dimension_names[len(spec.design.dims):]), tuple(array.shape[len(spec.design.dims):]))
+        (kept if name in kept_names else series)[name] = variable
+    return Layout(str(path), spec.design.dims, spec.design.shape, statistics, series, kept)
+
+
+def _progress(total: int, enabled: bool | None):
+    from tqdm import tqdm
+
+    enabled = sys.stderr.isatty() if enabled is None else enabled
+    return tqdm(total=total, unit="run", desc="sweep", disable=not enabled, dynamic_ncols=True)
+
+
+def _run_tasks(client, tasks: list[RunTask], layout: Layout, bar) -> list[dict[str, Any]]:
+    """Submit the tasks, follow them; a task that raised (a worker lost) is recorded as failed."""
+    from distributed import as_completed
+
+    futures = {client.submit(execute, task, layout, key=f"run-{task.flat}-{task.key[:12]}", pure=False): task for task in tasks}
+    summaries, failed = [], 0
+    for future in as_completed(futures):
+        task = futures.pop(future)
+        try:
+            summary = future.result()
+        except Exception as exc:  # the worker died or the task could not run: the driver records it
+            message = f"{type(exc).__name__}: {exc}"
+            write_run(layout, task.index, {"run_key": task.key, "status": -1, "cause": "worker error", "message": message})
+            summary = {"flat": task.flat, "status": -1, "cause": "worker error", "message": message}
+        failed += summary["status"] != 0
+        summaries.append(summary)
+        bar.set_postfix(failed=failed, refresh=False)
+        bar.update(1)
+    return summaries
+
+
+def store_causes(path: Path) -> dict[str, int]:
+    """Failed runs of the store, by cause."""
+    import zarr
+
+    group = zarr.open_group(str(path), mode="r")
+    status = np.asarray(group["status"][...]).ravel()
+    causes = np.asarray(group["cause"][...], dtype=object).ravel()
+    out: dict[str, int] = {}
+    for cause in causes[status == -1]:
+        out[str(cause)] = out.get(str(cause), 0) + 1
+    return out
+
+
+def run_sweep(
+    spec: SweepSpec,
+    out: str | Path,
+    *,
+    scheduler: str | None = None,
+    workers: int | None = None,
+    progress: bool | None = None,
+    overwrite: bool = False,
+    retry_failed: bool = False,
+) -> SweepOutcome:
+    """Run every run of ``spec`` that the store at ``out`` does not hold yet (module docstring)."""
+    started = time.perf_counter()
+    path = Path(out) / "sweep.zarr"
+    existing = existing_layout_key(path)
+    if existing is not None and existing != spec.layout_key:
+        if not overwrite:
+            raise SweepError(
+                f"{str(path)!r} holds another sweep (other axes, values or outputs); choose another --out or pass --overwrite",
+                key="out",
+                value=str(out),
+            )
+        remove_store(path)
+        existing = None
+    tasks = make_tasks(spec)
+    todo = list(range(len(tasks))) if existing is None else _todo(spec, path, retry_failed)
+    outcome = SweepOutcome(path, len(tasks), skipped=len(tasks) - len(todo))
+    if todo:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        with dask_client(scheduler, workers) as client:
+            layout = _prepare_store(spec, path, client, tasks) if existing is None else _layout_of_store(spec, path)
+            with _progress(len(todo), progress) as bar:
+                submitted = time.perf_counter()
+                outcome.summaries = _run_tasks(client, [tasks[i] for i in todo], layout, bar)
+                outcome.run_phase_time = time.perf_counter() - submitted
+        outcome.ran = len(todo)
+    outcome.causes = store_causes(path)
+    outcome.wall_time = time.perf_counter() - started
+    return outcome

@@ -1,0 +1,185 @@
+"""Pictures of a sweep, declared in the sweep file (``[[figure]]``), drawn from its dataset.
+
+Kinds (:data:`FIGURES`; ``x``/``y`` name axes, ``value``/``points``/... name
+dataset variables, ``select = {AXIS = VALUE}`` fixes the other axes, nearest
+value; unselected axes take their first value):
+
+* ``lines``: scalar variable(s) ``values = [...]`` against axis ``x``, one
+  curve per value of an optional second axis ``by``;
+* ``map``: a scalar ``value`` over axes ``x`` and ``y`` (grid designs; sampled
+  designs draw the samples as coloured points), ``log_color``;
+* ``bifurcation``: Poincare points ``points`` (an analysis's ``LABEL_points``),
+  column ``component``, against axis ``x``;
+* ``waterfall``: spectra ``amplitude`` over ``frequency`` stacked along ``x``;
+* ``orbit``: a kept eccentricity ``array`` (columns x, y) divided by the
+  clearance at the scene key ``clearance``, one panel per value of ``x``
+  (at most ``panels``).
+
+The PNGs use :mod:`robot.analysis.figures`; the same data feed the HTML report
+(:mod:`robot.sweep.report`). Each drawing function returns ``(title, traces)``
+where traces are plain data the report turns into plotly figures.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any, Callable
+
+import numpy as np
+
+from robot.sweep.errors import SweepError
+
+_COMMON = {"kind", "title", "select"}
+
+
+@dataclass(frozen=True)
+class FigureKind:
+    keys: frozenset[str]
+    required: frozenset[str]
+    draw: Callable[..., Any]
+    grid_only: bool = False
+
+
+def _axis_value(dataset, axis: str):
+    return dataset[axis].values
+
+
+def selected(dataset, figure: dict, keep: tuple[str, ...]):
+    """The dataset with every run dimension other than ``keep`` fixed (``select`` or the first value)."""
+    from robot.sweep.design import SAMPLE_DIM
+
+    selection = dict(figure.get("select", {}))
+    out = dataset
+    for dim in dataset.attrs.get("coordinates", []):
+        if dim in keep or dim not in out.dims or dim == SAMPLE_DIM:
+            continue
+        out = out.sel({dim: selection[dim]}, method="nearest") if dim in selection else out.isel({dim: 0})
+    return out
+
+
+def draw_lines(dataset, figure: dict, out: Path):
+    from robot.analysis.figures import new_figure, save_png
+
+    x, by = figure["x"], figure.get("by")
+    data = selected(dataset, figure, (x, by) if by else (x,))
+    plot = new_figure()
+    axes = plot.add_subplot()
+    traces = []
+    for value in figure["values"]:
+        curves = [(None, data[value])] if by is None else [(f"{by}={b:g}", data[value].sel({by: b})) for b in data[by].values]
+        for label, curve in curves:
+            name = value if label is None else f"{value}, {label}"
+            axes.plot(data[x].values, curve.values, marker="o", markersize=3, label=name)
+            traces.append({"type": "line", "x": data[x].values, "y": curve.values, "name": name})
+    axes.set(xlabel=x, xscale=figure.get("x_scale", "linear"), yscale=figure.get("y_scale", "linear"))
+    axes.legend(fontsize=7)
+    return plot, traces
+
+
+def draw_map(dataset, figure: dict, out: Path):
+    from robot.analysis.figures import map_figure, new_figure
+
+    x, y, value = figure["x"], figure["y"], figure["value"]
+    log = bool(figure.get("log_color", False))
+    if "sample" in dataset.dims:
+        plot = new_figure()
+        axes = plot.add_subplot()
+        from matplotlib.colors import LogNorm
+
+        values = dataset[value].values
+        points = axes.scatter(dataset[x].values, dataset[y].values, c=values, norm=LogNorm() if log else None)
+        plot.colorbar(points, ax=axes, label=value)
+        axes.set(xlabel=x, ylabel=y)
+        return plot, [{"type": "scatter_map", "x": dataset[x].values, "y": dataset[y].values, "z": values, "name": value}]
+    data = selected(dataset, figure, (x, y))
+    z = data[value].transpose(y, x).values
+    plot = map_figure(data[x].values, data[y].values, z, x_label=x, y_label=y, value_label=value, log_scale=log)
+    return plot, [{"type": "heatmap", "x": data[x].values, "y": data[y].values, "z": z, "name": value}]
+
+
+def draw_bifurcation(dataset, figure: dict, out: Path):
+    from robot.analysis.bifurcation import BifurcationDiagram
+    from robot.analysis.figures import bifurcation_figure
+
+    x, points = figure["x"], figure["points"]
+    data = selected(dataset, figure, (x,))
+    cloud = data[points].values[..., int(figure.get("component", 0))] if data[points].ndim == 3 else data[points].values
+    diagram = BifurcationDiagram(data[x].values, cloud, parameter_label=x, coordinate_label=f"{points}[{figure.get('component', 0)}]")
+    mu, samples = diagram.scatter_data()
+    return bifurcation_figure(diagram, marker_size=2.0), [{"type": "points", "x": mu, "y": samples, "name": points}]
+
+
+def draw_waterfall(dataset, figure: dict, out: Path):
+    from robot.analysis.figures import waterfall_figure
+
+    x = figure["x"]
+    data = selected(dataset, figure, (x,))
+    frequency = np.asarray(data[figure["frequency"]].values)
+    frequency = frequency[0] if frequency.ndim == 2 else frequency
+    spectra = data[figure["amplitude"]].transpose(x, ...).values
+    plot = waterfall_figure(data[x].values, frequency, spectra, parameter_label=x)
+    return plot, [{"type": "surface", "x": frequency, "y": data[x].values, "z": spectra, "name": figure["amplitude"]}]
+
+
+def draw_orbit(dataset, figure: dict, out: Path, clearance_of: Callable[[dict], float]):
+    from robot.analysis.figures import orbit_figure
+
+    x, array = figure["x"], figure["array"]
+    data = selected(dataset, figure, (x,))
+    values = data[x].values
+    chosen = np.unique(np.linspace(0, len(values) - 1, min(len(values), int(figure.get("panels", 4)))).round().astype(int))
+    orbits, clearances, traces = {}, {}, []
+    for j in chosen:
+        name = f"{x}={values[j]:.3g}"
+        e = data[array].isel({x: j}).values
+        e = e[np.all(np.isfinite(e), axis=1)]
+        orbits[name], clearances[name] = e, clearance_of({x: values[j]})
+        traces.append({"type": "orbit", "x": e[:, 0] / clearances[name], "y": e[:, 1] / clearances[name], "name": name})
+    return orbit_figure(orbits, clearances), traces
+
+
+FIGURES: dict[str, FigureKind] = {
+    "lines": FigureKind(frozenset({"x", "values", "by", "x_scale", "y_scale"}), frozenset({"x", "values"}), draw_lines),
+    "map": FigureKind(frozenset({"x", "y", "value", "log_color"}), frozenset({"x", "y", "value"}), draw_map),
+    "bifurcation": FigureKind(frozenset({"x", "points", "component"}), frozenset({"x", "points"}), draw_bifurcation, grid_only=True),
+    "waterfall": FigureKind(frozenset({"x", "frequency", "amplitude"}), frozenset({"x", "frequency", "amplitude"}), draw_waterfall, grid_only=True),
+    "orbit": FigureKind(frozenset({"x", "array", "clearance", "panels"}), frozenset({"x", "array", "clearance"}), draw_orbit, grid_only=True),
+}
+
+
+def output_names(spec) -> set[str]:
+    """Every dataset variable a sweep will hold (figures may name them)."""
+    from robot.analysis import ANALYSES
+    from robot.sweep.store import COUNTS, TIMING
+
+    names = {f"{a.label}_{f.name}" for a in spec.analyses for f in ANALYSES[a.name].outputs}
+    names |= {s.name for s in spec.keep.arrays} if spec.keep else set()
+    return names | set(COUNTS) | set(TIMING) | {"status", "t_reached"}
+
+
+def check_figures(spec) -> None:
+    """Every ``[[figure]]`` table names a known kind, its keys, existing axes and variables."""
+    axes = {a.name for a in spec.axes}
+    variables = output_names(spec)
+    for figure in spec.figures:
+        kind = FIGURES.get(figure.get("kind")) if isinstance(figure, dict) else None
+        if kind is None:
+            raise SweepError(f"figure {figure!r}: kind must be one of {', '.join(FIGURES)}", key="figure.kind", value=figure.get("kind") if isinstance(figure, dict) else figure)
+        name = figure["kind"]
+        unknown = sorted(set(figure) - kind.keys - _COMMON)
+        missing = sorted(kind.required - set(figure))
+        if unknown or missing:
+            bad = (unknown or missing)[0]
+            raise SweepError(f"figure {name!r}: {'unknown key' if unknown else 'missing key'} {bad!r}; keys: {', '.join(sorted(kind.keys | _COMMON))}", key=f"figure.{bad}", value=figure.get(bad))
+        if kind.grid_only and spec.design.kind != "grid":
+            raise SweepError(f"figure {name!r} needs a grid design", key="figure.kind", value=name)
+        for key in ("x", "y", "by"):
+            if key in figure and figure[key] not in axes:
+                raise SweepError(f"figure {name!r}: {key}={figure[key]!r} is not an axis name ({', '.join(sorted(axes))})", key=f"figure.{key}", value=figure[key])
+        for key in ("value", "points", "frequency", "amplitude", "array"):
+            if key in figure and figure[key] not in variables:
+                raise SweepError(f"figure {name!r}: {key}={figure[key]!r} is not a variable of this sweep ({', '.join(sorted(variables))})", key=f"figure.{key}", value=figure[key])
+        for value in figure.get("values", []):
+            if value not in variables:
+                raise SweepError(f"figure {name!r}: values has {value!r}, not a variable of this sweep", key="figure.values", value=value)

@@ -1,0 +1,10 @@
+"""``python scripts/bench_sweep.py ARGS`` = ``clearance bench-sweep ARGS`` (see ``clearance bench-sweep --help``)."""
+
+import sys
+from pathlib import Path
+
+if __name__ == "__main__":
+    sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # this checkout's robot/, installed or not
+    from robot.cli.main import main
+
+    sys.exit(main(["bench-sweep", *sys.argv[1:]]))

@@ -1,0 +1,10 @@
+"""``python scripts/contact_laws_table.py ARGS`` = ``clearance contact-laws ARGS`` (kept for users and checks; see ``clearance contact-laws --help``)."""
+
+import sys
+from pathlib import Path
+
+if __name__ == "__main__":
+    sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # this checkout's robot/, installed or not
+    from robot.cli.main import main
+
+    sys.exit(main(["contact-laws", *sys.argv[1:]]))
