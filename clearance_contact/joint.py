@@ -375,20 +375,35 @@ class ClearanceJoint:
             resultant = contact.normal_force[members] @ contact.normal[members]
             arrays[f"{group}_force"][i] = math.sqrt(float(resultant @ resultant))
 
-    def record_outputs(self, arrays: dict[str, np.ndarray], rows: np.ndarray, outputs: np.ndarray) -> None:
+    def record_outputs(
+        self,
+        arrays: dict[str, np.ndarray],
+        rows: np.ndarray,
+        outputs: np.ndarray,
+        outer_rotation: np.ndarray,
+        outer_position: np.ndarray,
+        inner_position: np.ndarray,
+    ) -> None:
         """Write the records ``rows`` of :meth:`result_arrays` from the kernel's flat outputs (m, ``output_size``).
 
-        The same values as :meth:`record` of ``JointContact.from_output(self, outputs[j])`` for
-        each row, in a few vectorised operations (the simulator's compiled outputs).
+        The same values as :meth:`record` of ``JointContact.from_output(self, outputs[j])`` at
+        the poses ``outer_rotation[j]`` (m, 3, 3), ``outer_position[j]``, ``inner_position[j]``
+        (m, 3) for each row, in a few vectorised operations (the simulator's compiled outputs).
         """
         k, r = self.N_CANDIDATES, self.N_ECCENTRICITY
         m = outputs.shape[0]
         vectors = outputs[:, self.NORMAL : self.NORMAL + 3 * (4 * k + r)].reshape(m, -1, 3)
+        normal_force = outputs[:, self.NORMAL_FORCE : self.NORMAL_FORCE + k]
         arrays["eccentricity"][rows] = vectors[:, 4 * k : 4 * k + r].reshape(m, *self.eccentricity_shape)
+        arrays["centre_in_outer"][rows] = np.einsum("mji,mj->mi", outer_rotation, inner_position - outer_position)
         arrays["penetration"][rows] = outputs[:, self.PENETRATION : self.PENETRATION + k]
-        arrays["normal_force"][rows] = outputs[:, self.NORMAL_FORCE : self.NORMAL_FORCE + k]
+        arrays["normal_force"][rows] = normal_force
         arrays["friction_force"][rows] = np.linalg.norm(vectors[:, 3 * k : 4 * k], axis=2)
         arrays["kind"][rows] = outputs[:, self.KIND : self.KIND + k].astype(np.int64)
+        for group, candidates in self.FORCE_GROUPS.items():
+            members = list(candidates)
+            resultant = np.einsum("mk,mkj->mj", normal_force[:, members], vectors[:, members])
+            arrays[f"{group}_force"][rows] = np.sqrt(np.einsum("mj,mj->m", resultant, resultant))
 
     # -- drawing -----------------------------------------------------------------------
     @classmethod

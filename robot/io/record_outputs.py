@@ -8,6 +8,9 @@ kinetic and potential energies, and per clearance joint what its type records
 (:meth:`clearance_contact.ClearanceJoint.result_arrays`). Two paths compute the
 same equations:
 
+With force elements (:mod:`robot.dynamics.forces`) also ``force_energy`` (energy
+stored in them) and per element ``force_NAME`` (its scalar force or torque).
+
 * :func:`reference_outputs`: per record :func:`robot.dynamics.equations.evaluate`
   (the Python constraint kernel, every contact law's ``evaluate``, the KKT solve)
   and Pinocchio's kinematics and energies: any mechanism, and the oracle of the
@@ -48,6 +51,9 @@ def allocate(dynamics: D.DynamicsModel, n: int) -> tuple[dict[str, np.ndarray], 
         "actuator_power": np.empty(n),
         "contact_power": np.empty(n),
     }
+    if dynamics.forces is not None:  # force elements: energy stored, each element's scalar force or torque
+        arrays["force_energy"] = np.empty(n)
+        arrays["force_scalars"] = np.empty((n, len(dynamics.forces.elements)))
     per_site = {contact.site.name: contact.law.result_arrays(n) for contact in dynamics.contacts}
     return arrays, per_site
 
@@ -78,6 +84,7 @@ def reference_outputs(
     data = workspace.data
     arrays, per_site = allocate(dynamics, len(t))
     act = mechanism.actuator_v_index
+    forces = workspace.forces
     for i in range(len(t)):
         q = D.normalise_quaternions(mechanism, y[i, :nq])
         v = y[i, nq : nq + nv]
@@ -85,12 +92,16 @@ def reference_outputs(
         force = evaluation.driving_force(dynamics.constraints)
         arrays["driving_force"][i] = force
         arrays["constraint_residual"][i] = np.max(np.abs(evaluation.residual)) if evaluation.residual.size else 0.0
-        arrays["actuator_power"][i] = force @ v[act]
+        arrays["actuator_power"][i] = force @ v[act] + (0.0 if forces is None else forces.powers[0])
+        if forces is not None:
+            arrays["force_scalars"][i], arrays["force_energy"][i] = evaluation.force_scalars, forces.potential_energy(q)
         arrays["contact_power"][i] = evaluation.generalized_contact_force @ v
-        _end_effector(model, data, dynamics.end_effector_frame, q, v, evaluation.qdd, arrays, i)
+        # the contact laws' poses first: the end-effector pass below moves data to the acceleration's kinematics
         for contact, result in zip(dynamics.contacts, evaluation.contacts):
-            contact.law.record(per_site[contact.site.name], i, result)
-    return _with_sites(arrays, per_site)
+            outer, inner = data.oMf[contact.site.outer_frame], data.oMf[contact.site.inner_frame]
+            contact.law.record(per_site[contact.site.name], i, result, outer.rotation, outer.translation, inner.translation)
+        _end_effector(model, data, dynamics.end_effector_frame, q, v, evaluation.qdd, arrays, i)
+    return _with_sites(dynamics, arrays, per_site)
 
 
 def compiled_outputs(
@@ -110,6 +121,10 @@ def compiled_outputs(
     actuator_power, contact_power = arrays["actuator_power"], arrays["contact_power"]
     frame, drive = dynamics.end_effector_frame, workspace.drive
     frames_a, frames_b, actuator_q, placements = compiled.frames_a, compiled.frames_b, compiled.actuator_q, compiled.placements
+    # per record the placements (rotation, then translation) of every clearance joint's two element frames
+    site_frames = np.array([[c.site.outer_frame, c.site.inner_frame] for c in dynamics.contacts], dtype=np.int64).reshape(-1)
+    poses = np.empty((n, site_frames.shape[0], K.SE3_FLOATS))
+    forces = workspace.forces
     for i in range(n):
         time = float(t[i])
         rate = D.state_derivative(dynamics, workspace, time, y[i], onset[i])
@@ -117,21 +132,32 @@ def compiled_outputs(
         v = y[i, nq : nq + nv]
         # Pinocchio's multipliers of the driving rows are the driving forces (equations module docstring)
         driving[i] = data.lambda_c[workspace.rows.n_closure_kept :]
+        # the actuator power of the right-hand side includes the force-driven actuators' (as the reference)
         actuator_power[i], contact_power[i] = rate[nq + nv], rate[nq + nv + 1]
+        if forces is not None:
+            arrays["force_scalars"][i], arrays["force_energy"][i] = forces.scalars, forces.potential_energy(q)
         residual[i] = K.largest_residual(placements, frames_a, frames_b, q, drive.values(time), actuator_q)
         site_outputs[i] = compiled.site_outputs_buffer
+        poses[i] = placements[site_frames]
         _end_effector(model, data, frame, q, v, rate[nq : nq + nv], arrays, i)
     rows = np.arange(n)
     for index, contact in enumerate(dynamics.contacts):
         first, end = compiled.site_table[index, K.SITE_OUT], compiled.site_table[index, K.SITE_OUT_END]
-        contact.law.record_outputs(per_site[contact.site.name], rows, site_outputs[:, first:end])
-    return _with_sites(arrays, per_site)
+        outer, inner = poses[:, 2 * index], poses[:, 2 * index + 1]
+        # a placement row holds the rotation column-major: its 3 x 3 reshape is the rotation's transpose
+        rotation = outer[:, 0:9].reshape(n, 3, 3).transpose(0, 2, 1)
+        contact.law.record_outputs(per_site[contact.site.name], rows, site_outputs[:, first:end], rotation, outer[:, 9:12], inner[:, 9:12])
+    return _with_sites(dynamics, arrays, per_site)
 
 
-def _with_sites(arrays: dict[str, np.ndarray], per_site: dict[str, dict[str, np.ndarray]]) -> dict[str, np.ndarray]:
+def _with_sites(dynamics: D.DynamicsModel, arrays: dict[str, np.ndarray], per_site: dict[str, dict[str, np.ndarray]]) -> dict[str, np.ndarray]:
+    """The result's names: ``NAME_<key>`` per clearance joint, ``force_NAME`` per force element."""
     for name, site_arrays in per_site.items():
         for key, value in site_arrays.items():
             arrays[f"{name}_{key}"] = value
+    scalars = arrays.pop("force_scalars", None)
+    for k, element in enumerate(() if dynamics.forces is None else dynamics.forces.elements):
+        arrays[f"force_{element.name}"] = scalars[:, k]
     return arrays
 
 

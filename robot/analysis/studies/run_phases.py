@@ -25,6 +25,7 @@ No profiler is used (``cProfile`` roughly doubles the cost of small calls).
 
 from __future__ import annotations
 
+import inspect
 import json
 import os
 import statistics
@@ -185,7 +186,9 @@ def worker(scene: str, out_dir: str, imports: float) -> dict:
     timers = ExclusiveTimers()
     timers.wrap(run_module, "integrate", "integrate")
     timers.wrap(run_module, "make_result", "outputs")
-    result = run_module.run_scene(run, progress=lambda t: None, output=run.scene.output)  # as the command does
+    # as the command does: the outputs at the records the file keeps (a tree older than that option: at all)
+    keeps = "output" in inspect.signature(run_module.run_scene).parameters
+    result = run_module.run_scene(run, progress=lambda t: None, **({"output": run.scene.output} if keeps else {}))
     timers.restore()
     phases["integrate"], phases["outputs"] = timers.spent["integrate"], timers.spent["outputs"]
     start = clock()
