@@ -24,6 +24,7 @@ from clearance_contact import DISSIPATION_MODELS, RADIAL_LAWS
 from robot import simulate
 from robot.sweep import SweepError, load_sweep, open_sweep
 from robot.sweep.engine import make_tasks, plan_layout, store_attrs
+from robot.sweep.report import draw_all
 from robot.sweep.sensitivity import relative_change, sensitivity_table
 from robot.sweep.store import create_store
 from robot.sweep.task import execute, probe
@@ -43,6 +44,10 @@ def test_shipped_study_covers_every_law_and_links_the_dissipation_of_both_joints
         assert joints["S1"]["dissipation"] == joints["R1"]["dissipation"] == point["clearance.S1.dissipation"]
         assert joints["R1"]["radial_law"] == point["clearance.R1.radial_law"]
     assert len(set(spec.run_keys)) == spec.design.size
+    # its control: the scene's laws with c_e of both joints moved by +-0.01
+    control = load_sweep(STUDY.with_name("contact_laws_sensitivity_control.toml"))
+    for point, scene in zip(control.design.points, control.scenes):
+        assert {e["joint"]: e["restitution"] for e in scene.document["clearance"]} == {"S1": point["clearance.S1.restitution"], "R1": point["clearance.R1.restitution"]}
 
 
 AXIS = """
@@ -104,6 +109,11 @@ def test_softer_radial_law_penetrates_deeper_and_peaks_lower_through_the_sweep_p
     assert float(hertz.R1_penetration_maximum) == result.joint("R1").penetration.max()
     p5 = result.metadata["actuated_joints"].index("P5")
     assert float(hertz.P5_force_peak) == np.abs(result["driving_force"][:, p5]).max()
+
+    # the study's own figures (law names selected exactly) are drawn from this store, small
+    written = draw_all(spec, tmp_path / "sweep.zarr", tmp_path)
+    pngs = [path for path in written if path.suffix == ".png"]
+    assert len(pngs) == len(spec.figures) and all(0 < path.stat().st_size < 300_000 for path in pngs)
 
 
 def _dataset(values: list[float], status: list[int]) -> xr.Dataset:

@@ -61,7 +61,14 @@ def selected(dataset, figure: dict, keep: tuple[str, ...]):
     for dim in dataset.attrs.get("coordinates", []):
         if dim in keep or dim not in out.dims or dim == SAMPLE_DIM:
             continue
-        out = out.sel({dim: selection[dim]}, method="nearest") if dim in selection else out.isel({dim: 0})
+        if dim not in selection:
+            out = out.isel({dim: 0})
+        elif out[dim].dtype.kind in "biuf":
+            out = out.sel({dim: selection[dim]}, method="nearest")
+        elif str(selection[dim]) in [str(v) for v in out[dim].values]:
+            out = out.sel({dim: selection[dim]})  # names (law names) are chosen exactly
+        else:
+            raise SweepError(f"figure select: {dim}={selection[dim]!r} is not a value of the axis ({', '.join(map(str, out[dim].values))})", key=f"figure.select.{dim}", value=selection[dim])
     return out
 
 
@@ -123,6 +130,8 @@ def draw_map(dataset, figure: dict, out: Path):
         plot.axes[0].set_xticks(x_positions, x_names, rotation=20, fontsize=8)
     if y_names is not None:
         plot.axes[0].set_yticks(y_positions, y_names, fontsize=8)
+    if x_names is not None or y_names is not None:
+        plot.tight_layout(rect=(0.0, 0.0, 1.0, 0.95))  # room for the names and the title
     return plot, [{"type": "heatmap", "x": data[x].values, "y": data[y].values, "z": z, "name": value}]
 
 
@@ -192,7 +201,7 @@ def draw_sensitivity(dataset, figure: dict, out: Path):
     axes.set(xlabel=x, ylabel=f"change against {x} = {reference} (%)")
     axes.grid(axis="y", linewidth=0.3)
     axes.legend(fontsize=7)
-    plot.tight_layout()
+    plot.tight_layout(rect=(0.0, 0.0, 1.0, 0.94))  # room for the title
     return plot, traces
 
 
