@@ -21,6 +21,7 @@ import pytest
 from clearance_contact import ContactError
 from robot.dynamics import equations as D
 from robot.dynamics import state_jacobian as SJ
+from robot.integration import options as OPT
 from robot.errors import SceneError
 from robot.run import build_run
 from robot.scene.loader import load_scene
@@ -124,10 +125,10 @@ def test_applies_only_to_the_compiled_path_with_shipped_laws(misaligned, with_py
 def test_a_run_with_it_follows_the_differenced_run(misaligned, method, rtol):
     """Same trajectory to the tolerance's order, through the first impacts; far fewer right-hand sides."""
     runs = {}
-    for jacobian in SJ.JACOBIAN_CHOICES:
+    for jacobian in OPT.JACOBIAN_CHOICES:
         options = SolverOptions(method, rtol=rtol, atol=rtol * 1e-2, max_step=1e-3, jacobian=jacobian)
         runs[jacobian] = integrate(misaligned.dynamics, misaligned.y0, (0.0, 0.02), options, misaligned.scene.limits)
-    structured, differenced = runs[SJ.STRUCTURED], runs[SJ.FINITE_DIFFERENCE]
+    structured, differenced = runs[OPT.STRUCTURED], runs[OPT.FINITE_DIFFERENCE]
     assert structured.success and differenced.success
     assert any(e[2] == "onset" for e in structured.events)
     nq = misaligned.dynamics.nq
@@ -144,7 +145,7 @@ def test_an_unknown_choice_is_refused_by_name(tmp_path):
     with pytest.raises(SceneError, match=r"\[solver\]: jacobian='exact' is not on offer"):
         load_scene(str(scene))
     scene.write_text('extends = "compound_misaligned"\n[solver]\nmethod = "CVODE_BDF"\njacobian = "finite-difference"\n')
-    assert load_scene(str(scene)).solver.jacobian == SJ.FINITE_DIFFERENCE
+    assert load_scene(str(scene)).solver.jacobian == OPT.FINITE_DIFFERENCE
 
 
 def test_a_refused_perturbation_falls_back_to_differences(misaligned, monkeypatch):

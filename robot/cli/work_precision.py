@@ -39,7 +39,7 @@ from robot.cli.common import EXIT_OK, UsageError, number_list, positive_int, pos
 from robot.integration.solvers import JACOBIAN_METHODS, METHODS
 from robot.run import build_run
 from robot.integration.simulation import SolverOptions
-from robot.dynamics.state_jacobian import STRUCTURED
+from robot.integration.options import STRUCTURED
 from robot.scene.loader import shipped_scenes
 from robot.analysis.studies import speed, stability
 from robot.analysis.studies.common import simulate

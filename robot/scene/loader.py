@@ -119,6 +119,8 @@ from robot.integration.options import STRUCTURED, FailureLimits, SolverOptions
 from robot.integration.solvers import FIXED_STEP_METHODS, METHODS
 
 SCENE_DIR = Path(__file__).resolve().parent / "scenes"
+#: the platform pose coordinates a platform trajectory prescribes (robot.model.trajectory uses them)
+POSE_COORDINATES = ("x", "z", "roll", "pitch", "yaw")
 
 _TOP_KEYS = {"name", "description", "mechanism", "end_effector", "duration", "gravity", "trajectory", "solver", "baumgarte", "limits", "materials", "clearance", "initial", "output", "extends", "force", "actuators"}
 _OUTPUT_KEYS = {"step", "keep", "precision"}
@@ -526,8 +528,6 @@ def _trajectory(table: dict, where: str, base_dir: Path | None = None) -> Trajec
     preset = table.get("preset")
     coordinates = {k: v for k, v in table.items() if k not in ("type", "period", "preset")}
     if kind == "platform":
-        from robot.model.trajectory import POSE_COORDINATES
-
         _unknown(coordinates, set(POSE_COORDINATES), w)
         if preset not in (None, "reference"):
             raise SceneError(f"{w}: preset={preset!r} is not known; use 'reference' or give x, z, roll, pitch, yaw", key="preset", value=preset)
