@@ -238,7 +238,8 @@ def default_statistics(scene: Scene) -> dict[str, str]:
     for joint in scene.clearance_joints:
         signals[f"{joint}_force"] = f"{joint}_normal_force:sum"
         signals[f"{joint}_penetration"] = f"{joint}_penetration:max"
-    signals["driving_force"] = "driving_force:maxabs"
+    if scene.trajectory.kind == "platform" or scene.trajectory.coordinates:  # else no motion-driven joint: no driving force
+        signals["driving_force"] = "driving_force:maxabs"
     signals["ee_acceleration"] = "ee_acceleration:norm"
     return signals
 
