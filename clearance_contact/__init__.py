@@ -17,14 +17,15 @@ as plain Python.
 * :mod:`.joint`: ``ClearanceJoint`` (base class of the joint types), ``Shape``, ``output_layout``;
 * :mod:`.registry`: ``register_joint_type``, ``joint_type``, ``joint_types``;
 * :mod:`.spherical`: ``SphericalClearanceJoint``;
-* :mod:`.revolute`: ``RevoluteClearanceJoint``.
+* :mod:`.revolute`: ``RevoluteClearanceJoint``;
+* :mod:`.translational`: ``TranslationalClearanceJoint``, ``PlanarTranslationalClearanceJoint``.
 
 The names are imported lazily (on first use): ``import clearance_contact.errors``
 (what the ``robot`` package's exceptions need) loads neither numba nor the laws,
 and the shipped joint types register on the registry's first look-up.
 """
 
-from importlib import import_module
+from .lazy import lazy_exports
 
 #: public name -> the submodule that defines it
 _PUBLIC = {
@@ -42,6 +43,7 @@ _PUBLIC = {
     "cylinder_line_stiffness": ".materials",
     "flat_punch_stiffness": ".materials",
     "hertz_sphere_stiffness": ".materials",
+    "sphere_plane_stiffness": ".materials",
     "EXPONENT_RANGE": ".normal_force",
     "ONSET_RATE_FLOOR": ".normal_force",
     "HertzImpactMaximum": ".normal_force",
@@ -65,18 +67,11 @@ _PUBLIC = {
     "register_joint_type": ".registry",
     "SphericalClearanceJoint": ".spherical",
     "RevoluteClearanceJoint": ".revolute",
+    "TranslationalClearanceJoint": ".translational",
+    "PlanarTranslationalClearanceJoint": ".translational",
 }
 
 __all__ = sorted(_PUBLIC)
 
 
-def __getattr__(name: str):
-    if name in _PUBLIC:
-        value = getattr(import_module(_PUBLIC[name], __name__), name)
-        globals()[name] = value
-        return value
-    raise AttributeError(f"module 'clearance_contact' has no attribute {name!r}")
-
-
-def __dir__() -> list[str]:
-    return sorted(set(globals()) | set(_PUBLIC))
+__getattr__, __dir__ = lazy_exports(__name__, globals(), _PUBLIC)

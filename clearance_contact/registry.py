@@ -29,7 +29,7 @@ COMMON_SCENE_KEYS = frozenset({"joint", "type", "outer_on", "material", "outer_m
 _TYPES: dict[str, type[ClearanceJoint]] = {}
 
 #: the shipped types' modules: imported (so registered) on the first look-up, not at package import
-BUILTIN_MODULES = ("clearance_contact.spherical", "clearance_contact.revolute")
+BUILTIN_MODULES = ("clearance_contact.spherical", "clearance_contact.revolute", "clearance_contact.translational")
 _builtins_loaded = False
 
 

@@ -1009,6 +1009,7 @@ class RevoluteClearanceJoint(ClearanceJoint):
     REQUIRED_KEYS = ("journal_radius", "radial_clearance", "bearing_outer_radius", "bearing_length", "axial_clearance")
     GEOMETRY_KEYS = REQUIRED_KEYS
     GAP_KEYS = ("radial_clearance", "axial_clearance")
+    FORCE_GROUPS = {"radial": (0, 2), "axial": (1, 3)}
     DEFAULT_GEOMETRY = {
         "journal_radius": 0.02, "radial_clearance": 1.0e-4, "bearing_outer_radius": 0.035, "bearing_length": 0.04, "axial_clearance": 1.0e-4,
     }  # fmt: skip
