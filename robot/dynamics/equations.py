@@ -222,8 +222,9 @@ class CompiledTerms:
         model = dynamics.mechanism.model
         closures = [rows.closure for rows in dynamics.constraints.closures]
         self.placements = K.placement_buffer(data.oMf)
-        self.jacobian = data.J
-        self.jacobian_rate = data.dJ
+        # views of Pinocchio's buffers; reshaped because eigenpy hands a 6 x 1 matrix (one-dof model) over as (6,)
+        self.jacobian = data.J.reshape(6, model.nv)
+        self.jacobian_rate = data.dJ.reshape(6, model.nv)
         self.frames_a = np.array([c.frame_a for c in closures], dtype=np.int64)
         self.frames_b = np.array([c.frame_b for c in closures], dtype=np.int64)
         self.closure_masks = K.support_mask(model, [f for c in closures for f in (c.frame_a, c.frame_b)])

@@ -247,7 +247,8 @@ def default_statistics(scene: Scene) -> dict[str, str]:
     for joint in scene.clearance_joints:
         signals[f"{joint}_force"] = f"{joint}_normal_force:sum"
         signals[f"{joint}_penetration"] = f"{joint}_penetration:max"
-    signals["driving_force"] = "driving_force:maxabs"
+    if scene.trajectory.kind == "platform" or scene.trajectory.coordinates:  # else no motion-driven joint: no driving force
+        signals["driving_force"] = "driving_force:maxabs"
     signals["ee_acceleration"] = "ee_acceleration:norm"
     return signals
 
@@ -282,8 +283,10 @@ def _analysis(table: Any, where: str) -> AnalysisSpec:
         known = ", ".join(sorted(input_names | set(parameters)))
         raise SweepError(f"{w}: {unknown[0]}={table[unknown[0]]!r} is neither an input nor a parameter of {name!r} ({known})", key=f"{label}.{unknown[0]}", value=table[unknown[0]])
     given = {k: v for k, v in table.items() if k in input_names}
-    if "t" in input_names:
-        given.setdefault("t", "t")
+    # inputs named after the run's own arrays: t always; every input of an analysis that needs the run
+    for f in analysis.inputs:
+        if f.name == "t" or analysis.needs_run:
+            given.setdefault(f.name, f.name)
     missing = [f.name for f in analysis.inputs if not f.optional and f.name not in given]
     missing += [p for p, default in parameters.items() if default is inspect.Parameter.empty and p not in table]
     if missing:
