@@ -5,11 +5,13 @@ from __future__ import annotations
 import os
 import subprocess
 import sys
+import warnings
 from pathlib import Path
 
 import pytest
 
 from robot.dynamics import equations as D
+from robot.errors import RedundantConstraintWarning
 
 DATA = Path(__file__).resolve().parent / "data"
 
@@ -85,3 +87,20 @@ def assert_passes_as_plain_python(test_file: str, selection: str, passed: int) -
         cwd=Path(__file__).resolve().parents[1], env=env, capture_output=True, text=True, timeout=300,
     )  # fmt: skip
     assert proc.returncode == 0 and f"{passed} passed" in proc.stdout, proc.stdout[-3000:] + proc.stderr[-3000:]
+
+
+@pytest.fixture(scope="module")
+def scene_runs(tmp_path_factory):
+    """``get(name)``: ``build_run`` of a shipped scene or of a :data:`CLOSURE_SCENES` scene, built once per module."""
+    from robot.run import build_run
+
+    runs = {}
+
+    def get(name):
+        if name not in runs:
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore", RedundantConstraintWarning)
+                runs[name] = build_run(str(closure_scene(tmp_path_factory.mktemp(name), name)) if name in CLOSURE_SCENES else name)
+        return runs[name]
+
+    return get

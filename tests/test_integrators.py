@@ -34,7 +34,7 @@ from robot.scene.loader import misalignment_rotation
 from robot.integration.simulation import RECORD_OUTPUT, SolverOptions, integrate
 from robot.analysis.studies.speed import reference_state_derivative
 
-from conftest import CLOSURE_SCENES, assert_passes_as_plain_python, closure_scene
+from conftest import CLOSURE_SCENES, assert_passes_as_plain_python
 
 DATA = Path(__file__).resolve().parent / "data"
 LWA = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
@@ -43,21 +43,6 @@ LWA = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
 @pytest.fixture(scope="module")
 def misaligned():
     return build_run("compound_misaligned")
-
-
-@pytest.fixture(scope="module")
-def scene_runs(tmp_path_factory):
-    """build_run by name: a shipped scene, or one of conftest's CLOSURE_SCENES (built once per module)."""
-    runs = {}
-
-    def get(name):
-        if name not in runs:
-            with warnings.catch_warnings():
-                warnings.simplefilter("ignore", RedundantConstraintWarning)
-                runs[name] = build_run(str(closure_scene(tmp_path_factory.mktemp(name), name)) if name in CLOSURE_SCENES else name)
-        return runs[name]
-
-    return get
 
 
 def _random_states(run, rng, n):
