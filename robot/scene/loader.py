@@ -135,6 +135,8 @@ _LIMIT_KEYS = {"penetration_ratio", "max_residual", "min_step", "max_wall_time"}
 _MATERIAL_KEYS = {"youngs_modulus", "poisson_ratio"}
 _FRICTION_KEYS = {"law", "static", "dynamic", "transition_velocity", "viscous", "reference_force", "coefficient", "regularisation_velocity"}
 _COORDINATE_KEYS = {"offset", "rate", "amplitudes", "harmonics", "phases"}
+_TRAJECTORY_KEYS = {"type", "period", "preset"}  # besides the coordinates' tables
+_INITIAL_KEYS = {"misalignment_deg", "positions", "velocities"}
 
 
 @dataclass(frozen=True)
@@ -472,7 +474,7 @@ def _output(table: dict, clearance_joints: list[str], where: str) -> OutputSpec:
 def _misalignment(initial: dict, clearances: tuple[ClearanceSpec, ...], where: str) -> dict[str, float]:
     """``[initial] misalignment_deg``, each checked against the joint's clearances (:func:`admissible_misalignment`)."""
     w = f"{where} [initial]"
-    _unknown(initial, {"misalignment_deg", "positions", "velocities"}, w)
+    _unknown(initial, _INITIAL_KEYS, w)
     misalignment = initial.get("misalignment_deg", {})
     if not isinstance(misalignment, dict):
         raise SceneError(f"{w}: misalignment_deg={misalignment!r} must be a table {{JOINT = degrees}}")
@@ -524,7 +526,7 @@ def _trajectory(table: dict, where: str, base_dir: Path | None = None) -> Trajec
         raise SceneError(f"{w}: type={kind!r} must be 'platform' or 'joints'", key="type", value=kind)
     period = _number(table, "period", w, 1.0, low=0.0, low_open=True)
     preset = table.get("preset")
-    coordinates = {k: v for k, v in table.items() if k not in ("type", "period", "preset")}
+    coordinates = {k: v for k, v in table.items() if k not in _TRAJECTORY_KEYS}
     if kind == "platform":
         from robot.model.trajectory import POSE_COORDINATES
 
