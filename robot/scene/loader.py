@@ -80,8 +80,11 @@ Schema (defaults in brackets)::
                                          # when independent, else a guess (robot.model.initial_state)
     velocities = { crank_rod = 0.0 }     # their rates at t = 0 (rad/s or m/s), projected onto the constraints
 
-    [output]   step [2e-4] (0: every step), keep [all arrays], precision ["float32"] (or "float64"):
+    [output]   step [2e-4] (0: every step), keep [all arrays], precision ["float64"] (or "float32"):
                see :class:`OutputSpec`
+
+Every key with its unit, default, valid range and examples: ``docs/scenes.md``
+(``tests/test_scene_docs.py`` checks it names every key accepted here).
 
 The output files are named after ``name`` made safe (:attr:`Scene.file_stem`).
 """
