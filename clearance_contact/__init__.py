@@ -17,71 +17,61 @@ as plain Python.
 * :mod:`.joint`: ``ClearanceJoint`` (base class of the joint types), ``Shape``, ``output_layout``;
 * :mod:`.registry`: ``register_joint_type``, ``joint_type``, ``joint_types``;
 * :mod:`.spherical`: ``SphericalClearanceJoint``;
-* :mod:`.revolute`: ``RevoluteClearanceJoint``.
+* :mod:`.revolute`: ``RevoluteClearanceJoint``;
+* :mod:`.translational`: ``TranslationalClearanceJoint``, ``PlanarTranslationalClearanceJoint``.
+
+The names are imported lazily (on first use): ``import clearance_contact.errors``
+(what the ``robot`` package's exceptions need) loads neither numba nor the laws,
+and the shipped joint types register on the registry's first look-up.
 """
 
-from .errors import ContactError, ContactParameterError
-from .friction import BrownMcPheeFriction, CoulombFriction, FrictionLaw, NoFriction, ScalarFrictionLaw
-from .materials import (
-    STEEL,
-    Material,
-    combined_modulus,
-    cylinder_line_stiffness,
-    flat_punch_stiffness,
-    hertz_sphere_stiffness,
-)
-from .normal_force import (
-    EXPONENT_RANGE,
-    ONSET_RATE_FLOOR,
-    HertzImpactMaximum,
-    hertz_impact_maximum,
-    hysteresis_factor,
-    lankarani_nikravesh,
-    validate_normal_law,
-)
-from .dissipation import DISSIPATION_MODELS, rebound_ratio
-from .radial_laws import RADIAL_LAWS
-from .result import KIND_LINE, KIND_NONE, KIND_PLANE, KIND_POINT, JointContact
-from .joint import ClearanceJoint, Shape, output_layout
-from .registry import joint_type, joint_types, register_joint_type
-from .spherical import SphericalClearanceJoint
-from .revolute import RevoluteClearanceJoint
+from .lazy import lazy_exports
 
-__all__ = [
-    "ContactError",
-    "ContactParameterError",
-    "Material",
-    "STEEL",
-    "combined_modulus",
-    "hertz_sphere_stiffness",
-    "cylinder_line_stiffness",
-    "flat_punch_stiffness",
-    "ONSET_RATE_FLOOR",
-    "EXPONENT_RANGE",
-    "lankarani_nikravesh",
-    "hysteresis_factor",
-    "validate_normal_law",
-    "HertzImpactMaximum",
-    "hertz_impact_maximum",
-    "FrictionLaw",
-    "ScalarFrictionLaw",
-    "BrownMcPheeFriction",
-    "CoulombFriction",
-    "NoFriction",
-    "JointContact",
-    "KIND_NONE",
-    "KIND_POINT",
-    "KIND_LINE",
-    "KIND_PLANE",
-    "ClearanceJoint",
-    "Shape",
-    "output_layout",
-    "register_joint_type",
-    "joint_type",
-    "joint_types",
-    "SphericalClearanceJoint",
-    "RevoluteClearanceJoint",
-    "DISSIPATION_MODELS",
-    "RADIAL_LAWS",
-    "rebound_ratio",
-]
+#: public name -> the submodule that defines it
+_PUBLIC = {
+    "ClearanceMechanismsError": ".errors",
+    "ContactError": ".errors",
+    "ContactParameterError": ".errors",
+    "BrownMcPheeFriction": ".friction",
+    "CoulombFriction": ".friction",
+    "FrictionLaw": ".friction",
+    "NoFriction": ".friction",
+    "ScalarFrictionLaw": ".friction",
+    "STEEL": ".materials",
+    "Material": ".materials",
+    "combined_modulus": ".materials",
+    "cylinder_line_stiffness": ".materials",
+    "flat_punch_stiffness": ".materials",
+    "hertz_sphere_stiffness": ".materials",
+    "sphere_plane_stiffness": ".materials",
+    "EXPONENT_RANGE": ".normal_force",
+    "ONSET_RATE_FLOOR": ".normal_force",
+    "HertzImpactMaximum": ".normal_force",
+    "hertz_impact_maximum": ".normal_force",
+    "hysteresis_factor": ".normal_force",
+    "lankarani_nikravesh": ".normal_force",
+    "validate_normal_law": ".normal_force",
+    "DISSIPATION_MODELS": ".dissipation",
+    "rebound_ratio": ".dissipation",
+    "RADIAL_LAWS": ".radial_laws",
+    "KIND_LINE": ".result",
+    "KIND_NONE": ".result",
+    "KIND_PLANE": ".result",
+    "KIND_POINT": ".result",
+    "JointContact": ".result",
+    "ClearanceJoint": ".joint",
+    "Shape": ".joint",
+    "output_layout": ".joint",
+    "joint_type": ".registry",
+    "joint_types": ".registry",
+    "register_joint_type": ".registry",
+    "SphericalClearanceJoint": ".spherical",
+    "RevoluteClearanceJoint": ".revolute",
+    "TranslationalClearanceJoint": ".translational",
+    "PlanarTranslationalClearanceJoint": ".translational",
+}
+
+__all__ = sorted(_PUBLIC)
+
+
+__getattr__, __dir__ = lazy_exports(__name__, globals(), _PUBLIC)

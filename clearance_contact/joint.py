@@ -21,7 +21,8 @@ everything else, once for all types:
   that a clearance of ``1e-4`` is reported as ``1e-4`` even when the law stores a
   radius ``r + 1e-4`` internally.
 * **Results, failure check, drawing**: per-joint result arrays (:meth:`result_arrays`,
-  :meth:`record`), the clearance of each candidate (:meth:`candidate_clearances`, the
+  :meth:`record`: also the inner element's centre in the outer frame and the resultant
+  normal force of each group of candidates, ``FORCE_GROUPS``), the clearance of each candidate (:meth:`candidate_clearances`, the
   scale of the simulator's penetration bound), and what an animation draws
   (:meth:`drawing`: :class:`Shape` s in the element frames, true or magnified gaps).
 
@@ -35,6 +36,7 @@ elsewhere (``KERNEL_ID = None``: the simulator then calls :meth:`evaluate`).
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from typing import Any, ClassVar, Mapping
 
@@ -135,6 +137,8 @@ class ClearanceJoint:
     ``GAP_KEYS``: the clearances among them (magnified in an animation);
     ``DEFAULT_GEOMETRY``: sizes drawn when a result does not record them.
     ``KERNEL_ID``: its id in the compiled dispatcher, None for a type evaluated in Python.
+    ``FORCE_GROUPS``: name -> candidate indices; each group's resultant normal force
+    |sum_k F_N,k n_k| is the result array ``<name>_force`` (e.g. ``radial``, ``axial``).
     ``EXAGGERATE_TILT``: an animation magnifies the inner element's axis tilt too.
     ``PENETRATION_USES_ROTATIONS``: False if ``penetration_kernel`` reads positions only
     (the rotations are then not converted: event functions call :meth:`penetration` often).
@@ -155,6 +159,7 @@ class ClearanceJoint:
     REQUIRED_KEYS: ClassVar[tuple[str, ...]] = ()
     NAME_KEYS: ClassVar[tuple[str, ...]] = ()
     GEOMETRY_KEYS: ClassVar[tuple[str, ...]] = ()
+    FORCE_GROUPS: ClassVar[Mapping[str, tuple[int, ...]]] = {}
     GAP_KEYS: ClassVar[tuple[str, ...]] = ()
     DEFAULT_GEOMETRY: ClassVar[Mapping[str, float]] = {}
     KERNEL_ID: ClassVar[int | None] = None
@@ -319,29 +324,71 @@ class ClearanceJoint:
         return (3,) if self.N_ECCENTRICITY == 1 else (self.N_ECCENTRICITY, 3)
 
     def result_arrays(self, n: int) -> dict[str, np.ndarray]:
-        """Empty per-joint result arrays for ``n`` records (result file keys ``NAME_<key>``)."""
+        """Empty per-joint result arrays for ``n`` records (result file keys ``NAME_<key>``).
+
+        ``centre_in_outer`` (n, 3): the inner element's frame origin in the outer
+        element's frame (ball in socket, journal midpoint in the bearing frame, slider
+        centre in the guide frame); ``<group>_force`` (n,) per ``FORCE_GROUPS``.
+        """
         k = self.N_CANDIDATES
-        return {
+        arrays = {
             "eccentricity": np.empty((n, *self.eccentricity_shape)),
+            "centre_in_outer": np.empty((n, 3)),
             "penetration": np.empty((n, k)),
             "normal_force": np.empty((n, k)),
             "friction_force": np.empty((n, k)),
             "kind": np.empty((n, k), dtype=np.int8),
         }
+        for group in self.FORCE_GROUPS:
+            arrays[f"{group}_force"] = np.empty(n)
+        return arrays
 
-    def record(self, arrays: dict[str, np.ndarray], i: int, contact: JointContact) -> None:
-        """Write record ``i`` of :meth:`result_arrays` from one evaluation (friction: its magnitude)."""
+    @classmethod
+    def result_keys(cls) -> tuple[str, ...]:
+        """The keys of :meth:`result_arrays` (result file arrays ``NAME_<key>``)."""
+        return ("eccentricity", "centre_in_outer", "penetration", "normal_force", "friction_force", "kind") + tuple(
+            f"{group}_force" for group in cls.FORCE_GROUPS
+        )
+
+    def record(
+        self,
+        arrays: dict[str, np.ndarray],
+        i: int,
+        contact: JointContact,
+        outer_rotation: ArrayLike,
+        outer_position: ArrayLike,
+        inner_position: ArrayLike,
+    ) -> None:
+        """Write record ``i`` of :meth:`result_arrays` from one evaluation at these element poses.
+
+        Friction: its magnitude per candidate; group forces: the magnitude of the
+        resultant of the group's normal forces ``sum_k F_N,k n_k`` (friction excluded).
+        """
         arrays["eccentricity"][i] = contact.eccentricity.reshape(self.eccentricity_shape)
+        arrays["centre_in_outer"][i] = np.asarray(outer_rotation).T @ (np.asarray(inner_position) - np.asarray(outer_position))
         arrays["penetration"][i] = contact.penetration
         arrays["normal_force"][i] = contact.normal_force
         arrays["friction_force"][i] = np.linalg.norm(contact.friction_force, axis=1)
         arrays["kind"][i] = contact.kind
+        for group, candidates in self.FORCE_GROUPS.items():
+            members = list(candidates)
+            resultant = contact.normal_force[members] @ contact.normal[members]
+            arrays[f"{group}_force"][i] = math.sqrt(float(resultant @ resultant))
 
     # -- drawing -----------------------------------------------------------------------
     @classmethod
     def magnified(cls, geometry: Mapping[str, float], factor: float) -> dict[str, float]:
         """The geometry with its gaps (``GAP_KEYS``) times ``factor`` (animation exaggeration)."""
         return {key: float(value) * factor if key in cls.GAP_KEYS else float(value) for key, value in geometry.items()}
+
+    @classmethod
+    def exaggerated_offset(cls, offset: np.ndarray, factor: float) -> np.ndarray:
+        """The inner element's offset in the outer frame as an animation draws it: times ``factor``.
+
+        A type whose elements also move freely (the slide of a translational joint)
+        magnifies only the offset the clearance bounds.
+        """
+        return factor * np.asarray(offset, dtype=float)
 
     @classmethod
     def drawing(cls, geometry: Mapping[str, float]) -> tuple[Shape, ...]:

@@ -159,3 +159,14 @@ def require_material(name: str, value) -> Material:
     if not isinstance(value, Material):
         raise ContactParameterError(f"{name}={value!r} must be a clearance_contact.Material")
     return value
+
+
+def sphere_plane_stiffness(radius: float, plane: Material, sphere: Material) -> float:
+    """Hertz point-contact stiffness K = 4/3 E* sqrt(R) (N/m^1.5) of a sphere of radius R on a flat face.
+
+    The external sphere-sphere stiffness with the second radius infinite (R* = R;
+    Johnson 1985 Sec. 4.2): e.g. a rounded corner of radius R against a plane.
+    ``radius`` valid range (0, inf).
+    """
+    r = require_positive("radius", radius)
+    return 4.0 / 3.0 * combined_modulus(plane, sphere) * math.sqrt(r)

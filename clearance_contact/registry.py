@@ -16,6 +16,8 @@ Everything else (scene parser, simulator, result files, animation) asks
 
 from __future__ import annotations
 
+import importlib
+
 from .errors import ContactParameterError
 from .joint import ClearanceJoint
 
@@ -25,6 +27,18 @@ __all__ = ["register_joint_type", "joint_type", "joint_types", "COMMON_SCENE_KEY
 COMMON_SCENE_KEYS = frozenset({"joint", "type", "outer_on", "material", "outer_material", "inner_material", "restitution", "friction"})
 
 _TYPES: dict[str, type[ClearanceJoint]] = {}
+
+#: the shipped types' modules: imported (so registered) on the first look-up, not at package import
+BUILTIN_MODULES = ("clearance_contact.spherical", "clearance_contact.revolute", "clearance_contact.translational")
+_builtins_loaded = False
+
+
+def _load_builtins() -> None:
+    global _builtins_loaded
+    if not _builtins_loaded:
+        _builtins_loaded = True
+        for module in BUILTIN_MODULES:
+            importlib.import_module(module)
 
 
 def register_joint_type(cls: type[ClearanceJoint]) -> type[ClearanceJoint]:
@@ -62,6 +76,7 @@ def register_joint_type(cls: type[ClearanceJoint]) -> type[ClearanceJoint]:
 
 def joint_type(name: str) -> type[ClearanceJoint]:
     """The class registered as ``name``; :class:`ContactParameterError` naming the registered ones otherwise."""
+    _load_builtins()
     try:
         return _TYPES[name]
     except (KeyError, TypeError):
@@ -72,4 +87,5 @@ def joint_type(name: str) -> type[ClearanceJoint]:
 
 def joint_types() -> tuple[str, ...]:
     """The registered type names, sorted."""
+    _load_builtins()
     return tuple(sorted(_TYPES))

@@ -341,6 +341,7 @@ class SphericalClearanceJoint(ClearanceJoint):
     REQUIRED_KEYS = ("ball_radius", "clearance")
     GEOMETRY_KEYS = ("ball_radius", "clearance")
     GAP_KEYS = ("clearance",)
+    FORCE_GROUPS = {"radial": (0,)}  # the normal force
     DEFAULT_GEOMETRY = {"ball_radius": 0.015, "clearance": 1.0e-4}
     KERNEL_ID = 0
     PENETRATION_USES_ROTATIONS = False  # delta = |b - s| - c

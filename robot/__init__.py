@@ -20,7 +20,7 @@ Pipeline (one way): :mod:`robot.scene` -> :mod:`robot.model` ->
 """
 
 import os
-from importlib import import_module
+from clearance_contact.lazy import lazy_exports
 
 # The matrices here are small (tens of rows): multi-threaded BLAS only adds
 # overhead on a loaded 2-core machine (a 90 x 180 product went from 30 to 200 us).
@@ -42,13 +42,4 @@ _PUBLIC = {
 __all__ = sorted(_PUBLIC)
 
 
-def __getattr__(name: str):
-    if name in _PUBLIC:
-        value = getattr(import_module(_PUBLIC[name]), name)
-        globals()[name] = value
-        return value
-    raise AttributeError(f"module 'robot' has no attribute {name!r}")
-
-
-def __dir__() -> list[str]:
-    return sorted(set(globals()) | set(_PUBLIC))
+__getattr__, __dir__ = lazy_exports(__name__, globals(), _PUBLIC)

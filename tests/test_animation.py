@@ -20,6 +20,7 @@ import pinocchio as pin
 import pytest
 import umsgpack
 
+from clearance_contact import RevoluteClearanceJoint
 from robot.errors import ResultFileError
 from robot.model.mechanism import build_mechanism
 from robot.model.platform_kinematics import PlatformLayout, inverse_kinematics
@@ -173,10 +174,10 @@ def test_revolute_tilt_is_magnified_through_its_tangent():
     tilt, spin = 1e-3, 0.7
     relative = pin.SE3(pin.exp3(np.array([0.0, tilt, 0.0])) @ pin.exp3(np.array([0.0, 0.0, spin])), np.array([1e-5, 0.0, 2e-5]))
     inner = outer * relative
-    drawn = outer.actInv(_exaggerated_inner(outer, inner, True, 100.0))
+    drawn = outer.actInv(_exaggerated_inner(outer, inner, RevoluteClearanceJoint, 100.0))
     assert math.acos(drawn.rotation[2, 2]) == pytest.approx(math.atan(100 * math.tan(tilt)), rel=1e-9)
     np.testing.assert_allclose(drawn.translation, 100 * relative.translation, atol=1e-12)
-    unchanged = outer.actInv(_exaggerated_inner(outer, inner, True, 1.0))
+    unchanged = outer.actInv(_exaggerated_inner(outer, inner, RevoluteClearanceJoint, 1.0))
     np.testing.assert_allclose(unchanged.rotation, relative.rotation, atol=1e-12)
 
 

@@ -241,7 +241,8 @@ def test_actuated_continuous_joint_is_rejected_with_advice():
 def test_bad_clearance_choices():
     with pytest.raises(ClearanceChoiceError, match=r"clearance joint 'R7' is neither a joint nor a closure of 'ups_rps'"):
         build_mechanism(URDF, clearance="R7")
-    with pytest.raises(ClearanceChoiceError, match=r"clearance joint 'P5' is a prismatic joint"):
+    # prismatic joints can carry clearance (translational types), but P5 is actuated
+    with pytest.raises(ClearanceChoiceError, match=r"clearance joint 'P5' is actuated; an actuated joint cannot carry clearance"):
         build_mechanism(URDF, clearance="P5")
 
 

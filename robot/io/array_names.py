@@ -16,21 +16,30 @@ a clearance study is about; energies are compared by differences).
 
 from __future__ import annotations
 
+from typing import Mapping, Sequence
+
 RECORD_ARRAYS = (
     "t", "q", "v", "record_kind", "onset_rates", "driving_force", "ee_position", "ee_velocity", "ee_acceleration",
     "constraint_residual", "kinetic_energy", "potential_energy", "actuator_power", "contact_power", "actuator_work",
     "contact_work",
 )
-SITE_SUFFIXES = ("eccentricity", "penetration", "normal_force", "friction_force", "kind")
+SITE_SUFFIXES = ("eccentricity", "centre_in_outer", "penetration", "normal_force", "friction_force", "kind")
 EVENT_ARRAYS = ("event_t", "event_candidate", "event_is_onset", "event_kind", "event_value")
 ALWAYS_KEPT = ("t", "record_kind")
 BULK_ARRAYS = ("q", "v", "onset_rates", "ee_position", "ee_velocity", "ee_acceleration", "constraint_residual")
-BULK_SITE_SUFFIXES = ("eccentricity",)
+BULK_SITE_SUFFIXES = ("eccentricity", "centre_in_outer")
 
 
-def result_array_names(clearance_joints: tuple[str, ...] | list[str]) -> tuple[str, ...]:
-    """Every array a result of a scene with these clearance joints can hold."""
-    sites = tuple(f"{joint}_{suffix}" for joint in clearance_joints for suffix in SITE_SUFFIXES)
+def result_array_names(clearance_joints: tuple[str, ...] | list[str] | Mapping[str, Sequence[str]]) -> tuple[str, ...]:
+    """Every array a result of a scene with these clearance joints can hold.
+
+    ``clearance_joints``: joint names (the suffixes every type writes, ``SITE_SUFFIXES``),
+    or joint name -> the suffixes its type writes (``ClearanceJoint.result_keys()``).
+    """
+    if isinstance(clearance_joints, Mapping):
+        sites = tuple(f"{joint}_{suffix}" for joint, suffixes in clearance_joints.items() for suffix in suffixes)
+    else:
+        sites = tuple(f"{joint}_{suffix}" for joint in clearance_joints for suffix in SITE_SUFFIXES)
     return RECORD_ARRAYS + sites + (EVENT_ARRAYS if clearance_joints else ())
 
 

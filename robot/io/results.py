@@ -20,9 +20,14 @@ force-driven, and contact); with force elements (``robot.dynamics.forces``) also
 element ``force_NAME`` (n, its scalar force, N, or torque, N m); ``record_kind`` (n, what
 each record is, below); ``onset_rates`` (n x candidates, the Lankarani-Nikravesh
 approach rate in use at each record); per clearance joint
-J: ``J_eccentricity`` (n x 3 spherical; n x 2 x 3 revolute, top and bottom ring),
+J: ``J_eccentricity`` (n x 3 spherical; n x 2 x 3 revolute, top and bottom ring;
+n x 2 x 3 translational, front and rear end of the slider), ``J_centre_in_outer``
+(n x 3, the ball / journal / slider centre in the socket / bearing / guide frame),
 ``J_penetration``, ``J_normal_force``, ``J_friction_force`` (magnitude),
-``J_kind`` (n x candidates). With contact events also ``event_t``,
+``J_kind`` (n x candidates), and per group of candidates of the type
+(``ClearanceJoint.FORCE_GROUPS``) the magnitude of the resultant normal force:
+``J_radial_force`` (spherical, revolute), ``J_axial_force`` (revolute),
+``J_lateral_force`` (translational). With contact events also ``event_t``,
 ``event_candidate``, ``event_is_onset``, ``event_kind`` (the record kind each
 event wrote: 1 onset, 2 penetration maximum, 5 force maximum) and ``event_value``
 (the event log: onsets with their approach rate, penetration maxima with their
@@ -258,7 +263,8 @@ def compute_outputs(dynamics: D.DynamicsModel, trajectory: Trajectory) -> dict[s
         out["ee_acceleration"][i] = pin.getFrameClassicalAcceleration(model, data, ee, LWA).linear
         out["kinetic_energy"][i], out["potential_energy"][i] = D.energy(dynamics, workspace, q, v)
         for contact, result in zip(dynamics.contacts, evaluation.contacts):
-            contact.law.record(per_site[contact.site.name], i, result)
+            outer, inner = data.oMf[contact.site.outer_frame], data.oMf[contact.site.inner_frame]
+            contact.law.record(per_site[contact.site.name], i, result, outer.rotation, outer.translation, inner.translation)
     for name, arrays in per_site.items():
         for key, value in arrays.items():
             out[f"{name}_{key}"] = value

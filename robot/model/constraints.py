@@ -12,7 +12,9 @@ construction), so the constraint set holds only
   actuated joint k (its coordinate is the actuator length);
 * optionally **centring constraints** of clearance sites, used only to assemble
   the initial state (ball centred in its socket, journal axis on the bearing axis,
-  with an optional bearing misalignment).
+  with an optional bearing misalignment; for a prismatic site, the ideal prismatic
+  joint: slider on the guide axis, ``x_a . (p_a - p_b) = y_a . (p_a - p_b) = 0``, and not
+  rotated, ``z_a . x_b = z_a . y_b = x_a . y_b = 0``; free along the axis).
 
 Velocity and acceleration (paper eq. (24)):
 ``Phi_q qd = -Phi_t`` and ``Phi_q qdd = gamma``, with
@@ -78,6 +80,8 @@ class ConstraintSet:
         labels = []
         for rows in self.closures:
             components = ("x", "y", "z", "rot_x", "rot_y")[: rows.closure.n_equations]
+            if rows.closure.kind == "prismatic":
+                components = ("x", "y", "rot_x", "rot_y", "rot_z")
             labels += [f"{rows.closure.name}:{component}" for component in components]
         if self.driven:
             labels += [f"{joint}:drive" for joint in self.mechanism.actuated_joints]
@@ -294,48 +298,86 @@ class ConstraintKernel:
         return out
 
 
+#: rotation rows (axis of frame a, axis of frame b): u_a . w_b = 0 for each pair
+_ROTATION_PAIRS = {"revolute": ((2, 0), (2, 1)), "prismatic": ((2, 0), (2, 1), (0, 1))}
+
+
+def _position_rows(kind: str) -> int:
+    """Number of position rows: 3 (p_a - p_b, world) or, prismatic, 2 (x_a, y_a . (p_a - p_b))."""
+    return 2 if kind == "prismatic" else 3
+
+
 def _closure_residual(model: pin.Model, data: pin.Data, rows: ClosureRows, out: np.ndarray) -> None:
     """Rows of one closure in Phi (reference equations of :func:`residual`)."""
     a, b, r = rows.closure.frame_a, rows.closure.frame_b, rows.row
-    out[r : r + 3] = data.oMf[a].translation - data.oMf[b].translation
-    if rows.closure.kind == "revolute":
-        z_a = data.oMf[a].rotation[:, 2]
-        rotation_b = _frame_b_rotation(data, rows)
-        out[r + 3] = z_a @ rotation_b[:, 0]
-        out[r + 4] = z_a @ rotation_b[:, 1]
+    kind = rows.closure.kind
+    gap = data.oMf[a].translation - data.oMf[b].translation
+    rotation_a = data.oMf[a].rotation
+    if kind == "prismatic":
+        out[r : r + 2] = rotation_a[:, :2].T @ gap
+    else:
+        out[r : r + 3] = gap
+    rotation_b = _frame_b_rotation(data, rows)
+    for k, (i, j) in enumerate(_ROTATION_PAIRS.get(kind, ()), start=r + _position_rows(kind)):
+        out[k] = rotation_a[:, i] @ rotation_b[:, j]
 
 
 def _closure_jacobian(model: pin.Model, data: pin.Data, rows: ClosureRows, out: np.ndarray) -> None:
-    """Rows of one closure in Phi_q (reference equations of :func:`jacobian`)."""
+    """Rows of one closure in Phi_q (reference equations of :func:`jacobian`).
+
+    d/dt (u_a . d) = u_a . (v_a - v_b) + (u_a x d) . w_a for d = p_a - p_b (prismatic);
+    d/dt (u_a . w_b) = (u_a x w_b) . (w_a - w_b) for the rotation rows.
+    """
     a, b, r = rows.closure.frame_a, rows.closure.frame_b, rows.row
+    kind = rows.closure.kind
     jac_a = pin.getFrameJacobian(model, data, a, LWA)
     jac_b = pin.getFrameJacobian(model, data, b, LWA)
-    out[r : r + 3] = jac_a[:3] - jac_b[:3]
-    if rows.closure.kind == "revolute":
-        z_a = data.oMf[a].rotation[:, 2]
-        rotation_b = _frame_b_rotation(data, rows)
-        relative = jac_a[3:] - jac_b[3:]
-        out[r + 3] = np.cross(z_a, rotation_b[:, 0]) @ relative
-        out[r + 4] = np.cross(z_a, rotation_b[:, 1]) @ relative
+    rotation_a = data.oMf[a].rotation
+    if kind == "prismatic":
+        gap = data.oMf[a].translation - data.oMf[b].translation
+        for k in range(2):
+            axis = rotation_a[:, k]
+            out[r + k] = axis @ (jac_a[:3] - jac_b[:3]) + np.cross(axis, gap) @ jac_a[3:]
+    else:
+        out[r : r + 3] = jac_a[:3] - jac_b[:3]
+    rotation_b = _frame_b_rotation(data, rows)
+    relative = jac_a[3:] - jac_b[3:]
+    for k, (i, j) in enumerate(_ROTATION_PAIRS.get(kind, ()), start=r + _position_rows(kind)):
+        out[k] = np.cross(rotation_a[:, i], rotation_b[:, j]) @ relative
 
 
 def _closure_gamma(model: pin.Model, data: pin.Data, rows: ClosureRows, out: np.ndarray) -> None:
-    """Rows of one closure in gamma (reference equations of :func:`gamma`)."""
+    """Rows of one closure in gamma (reference equations of :func:`gamma`): minus the rows' second
+    time derivative at zero joint acceleration (classical accelerations of the frames)."""
     a, b, r = rows.closure.frame_a, rows.closure.frame_b, rows.row
+    kind = rows.closure.kind
     acc_a = pin.getFrameClassicalAcceleration(model, data, a, LWA)
     acc_b = pin.getFrameClassicalAcceleration(model, data, b, LWA)
-    out[r : r + 3] = -(acc_a.linear - acc_b.linear)
-    if rows.closure.kind == "revolute":
-        vel_a = pin.getFrameVelocity(model, data, a, LWA).angular
-        vel_b = pin.getFrameVelocity(model, data, b, LWA).angular
-        z_a = data.oMf[a].rotation[:, 2]
-        rotation_b = _frame_b_rotation(data, rows)
-        d_omega = vel_a - vel_b
-        d_alpha = acc_a.angular - acc_b.angular
-        z_a_dot = np.cross(vel_a, z_a)
-        for k in (0, 1):
-            axis_b = rotation_b[:, k]
-            axis_b_dot = np.cross(vel_b, axis_b)
-            cross = np.cross(z_a, axis_b)
-            cross_dot = np.cross(z_a_dot, axis_b) + np.cross(z_a, axis_b_dot)
-            out[r + 3 + k] = -(d_alpha @ cross + d_omega @ cross_dot)
+    vel_a = pin.getFrameVelocity(model, data, a, LWA)
+    vel_b = pin.getFrameVelocity(model, data, b, LWA)
+    rotation_a = data.oMf[a].rotation
+    if kind == "prismatic":
+        # (u . d)'' = u'' . d + 2 u' . d' + u . d'',  u' = w_a x u,  u'' = alpha_a x u + w_a x u'
+        gap = data.oMf[a].translation - data.oMf[b].translation
+        gap_dot = vel_a.linear - vel_b.linear
+        gap_ddot = acc_a.linear - acc_b.linear
+        for k in range(2):
+            axis = rotation_a[:, k]
+            axis_dot = np.cross(vel_a.angular, axis)
+            axis_ddot = np.cross(acc_a.angular, axis) + np.cross(vel_a.angular, axis_dot)
+            out[r + k] = -(axis_ddot @ gap + 2.0 * axis_dot @ gap_dot + axis @ gap_ddot)
+    else:
+        out[r : r + 3] = -(acc_a.linear - acc_b.linear)
+    pairs = _ROTATION_PAIRS.get(kind, ())
+    if not pairs:
+        return
+    rotation_b = _frame_b_rotation(data, rows)
+    d_omega = vel_a.angular - vel_b.angular
+    d_alpha = acc_a.angular - acc_b.angular
+    for k, (i, j) in enumerate(pairs, start=r + _position_rows(kind)):
+        axis_a, axis_b = rotation_a[:, i], rotation_b[:, j]
+        axis_a_dot = np.cross(vel_a.angular, axis_a)
+        axis_b_dot = np.cross(vel_b.angular, axis_b)
+        cross = np.cross(axis_a, axis_b)
+        cross_dot = np.cross(axis_a_dot, axis_b) + np.cross(axis_a, axis_b_dot)
+        out[k] = -(d_alpha @ cross + d_omega @ cross_dot)

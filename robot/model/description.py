@@ -30,6 +30,8 @@ import numpy as np
 from robot.errors import MechanismFileError
 
 CLOSURE_TYPES = ("spherical", "revolute")
+#: URDF kinds of tree joints that can carry clearance -> the kind of clearance site they make
+CLEARANCE_TREE_KINDS = {"revolute": "revolute", "continuous": "revolute", "prismatic": "prismatic"}
 
 
 @dataclass(frozen=True)

@@ -11,14 +11,16 @@ A clearance joint imposes no kinematic constraint (seed paper, section
 
 * a **closure** chosen as clearance joint is simply not imposed: its two bodies
   interact only through contact forces (no new coordinates);
-* a **tree joint** (revolute) chosen as clearance joint becomes a free-flyer
-  joint at the same origin: the child body gains the five relative degrees of
-  freedom the joint used to remove (nv grows by 5).
+* a **tree joint** (revolute or prismatic) chosen as clearance joint becomes a
+  free-flyer joint at the same origin: the child body gains the five relative
+  degrees of freedom the joint used to remove (nv grows by 5).
 
 So the model holds exactly the coordinates and constraints the choice needs.
 Each clearance site gets two operational frames, ``NAME_outer`` (socket or
-bearing) and ``NAME_inner`` (ball or journal); for a revolute site their local z
-is the joint axis. Which body carries the outer element is a choice
+bearing) and ``NAME_inner`` (ball or journal); for a revolute or prismatic site
+their local z is the joint axis (for a prismatic site the guide axis; local x, the
+guide's width direction, is the joint frame's x made perpendicular to the axis, or its
+y when the axis is within 26 deg of x: :func:`rotation_z_to`). Which body carries the outer element is a choice
 (``outer_on="child"`` by default: the socket on the platform for S1 and the
 bearing on the limb for R1, as in the seed paper's ADAMS model).
 """
@@ -33,7 +35,7 @@ from typing import Mapping, Sequence
 import numpy as np
 import pinocchio as pin
 
-from robot.model.description import ClosureDeclaration, FrameOnLink, MechanismDescription, parse_mechanism
+from robot.model.description import CLEARANCE_TREE_KINDS, ClosureDeclaration, FrameOnLink, MechanismDescription, parse_mechanism
 from robot.errors import ClearanceChoiceError, MechanismFileError
 
 CLEARANCE_SIDES = ("child", "parent")
@@ -61,8 +63,9 @@ class Closure:
 class ClearanceSite:
     """A joint (or closure) replaced by a clearance joint.
 
-    ``outer_frame``/``inner_frame``: frame ids of the socket/bearing and the
-    ball/journal element frames (z = joint axis for a revolute site).
+    ``outer_frame``/``inner_frame``: frame ids of the socket/bearing/guide and the
+    ball/journal/slider element frames (z = joint axis for a revolute or prismatic
+    site). ``kind``: ``"spherical"``, ``"revolute"`` or ``"prismatic"``.
     ``replaces`` is ``"closure"`` or ``"joint"``; for a joint, ``free_joint`` is
     the name of the free-flyer joint that replaced it.
     """
@@ -228,15 +231,15 @@ def _clearance_tree_joints(description: MechanismDescription, choice: Mapping[st
             continue
         joint = description.joints.get(name)
         if joint is None:
-            valid = sorted([n for n, j in description.joints.items() if j.kind in ("revolute", "continuous")] + list(closure_names))
+            valid = sorted([n for n, j in description.joints.items() if j.kind in CLEARANCE_TREE_KINDS] + list(closure_names))
             raise ClearanceChoiceError(
                 f"clearance joint {name!r} is neither a joint nor a closure of {description.name!r}; "
                 f"joints that can carry clearance: {', '.join(valid)}"
             )
-        if joint.kind not in ("revolute", "continuous"):
+        if joint.kind not in CLEARANCE_TREE_KINDS:
             raise ClearanceChoiceError(
-                f"clearance joint {name!r} is a {joint.kind} joint; clearance is modelled for revolute joints "
-                "and spherical or revolute closures"
+                f"clearance joint {name!r} is a {joint.kind} joint; clearance is modelled for revolute and prismatic "
+                "joints and spherical or revolute closures"
             )
         if name in description.actuated_joints:
             raise ClearanceChoiceError(f"clearance joint {name!r} is actuated; an actuated joint cannot carry clearance")
@@ -282,7 +285,8 @@ def _closures_and_sites(model: pin.Model, description: MechanismDescription, cho
         names = _element_names(name, choice[name])
         parent_side = _add_frame(model, names[0], model.parents[free_id], model.jointPlacements[free_id] * align)
         child_side = _add_frame(model, names[1], free_id, align)
-        sites.append(_site(name, "revolute", "joint", choice[name], parent_side, child_side, name))
+        kind = CLEARANCE_TREE_KINDS[description.joints[name].kind]
+        sites.append(_site(name, kind, "joint", choice[name], parent_side, child_side, name))
     return closures, sites
 
 

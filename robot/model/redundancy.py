@@ -129,10 +129,11 @@ def row_scales(constraints: C.ConstraintSet, model: pin.Model, data: pin.Data, p
     scales = np.ones(constraints.n_rows)
     for rows in constraints.closures:
         r = rows.row
-        scales[r : r + 3] = np.linalg.norm(phi_q[r : r + 3])  # the rows are J_a^lin - J_b^lin (world axes)
-        if rows.closure.kind == "revolute":
+        position = 2 if rows.closure.kind == "prismatic" else 3  # prismatic centring: 2 position rows, 3 rotation rows
+        scales[r : r + position] = np.linalg.norm(phi_q[r : r + position])  # the rows are J_a^lin - J_b^lin (world axes)
+        if rows.closure.kind in ("revolute", "prismatic"):
             relative = pin.getFrameJacobian(model, data, rows.closure.frame_a, LWA)[3:] - pin.getFrameJacobian(model, data, rows.closure.frame_b, LWA)[3:]
-            scales[r + 3 : r + 5] = np.linalg.norm(relative)
+            scales[r + position : r + 5] = np.linalg.norm(relative)
     return scales
 
 

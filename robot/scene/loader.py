@@ -115,7 +115,7 @@ from clearance_contact.registry import COMMON_SCENE_KEYS
 from robot.data import shipped_urdf
 from robot.errors import MechanismFileError, SceneError
 from robot.io.array_names import result_array_names
-from robot.model.description import parse_mechanism
+from robot.model.description import CLEARANCE_TREE_KINDS, parse_mechanism
 from robot.scene.overrides import apply_overrides
 from robot.dynamics.baumgarte import Baumgarte
 from robot.integration.options import STRUCTURED, FailureLimits, SolverOptions
@@ -420,8 +420,8 @@ def _check_site_kinds(clearances: tuple[ClearanceSpec, ...], mechanism_path: Pat
         return
     kinds = {c.name: (c.kind, "closure") for c in description.closures}
     for name, joint in description.joints.items():
-        if joint.kind in ("revolute", "continuous"):  # a tree joint with clearance becomes a free joint
-            kinds.setdefault(name, ("revolute", "joint"))
+        if joint.kind in CLEARANCE_TREE_KINDS:  # a tree joint with clearance becomes a free joint
+            kinds.setdefault(name, (CLEARANCE_TREE_KINDS[joint.kind], "joint"))
     for spec in clearances:
         if spec.joint not in kinds:
             continue
@@ -456,7 +456,7 @@ def resolve_mechanism(mechanism: Any, base_dir: Path, where: str) -> Path:
     return candidate
 
 
-def _output(table: dict, clearance_joints: list[str], where: str) -> OutputSpec:
+def _output(table: dict, clearance_joints: dict[str, tuple[str, ...]], where: str) -> OutputSpec:
     w = f"{where} [output]"
     _unknown(table, _OUTPUT_KEYS, w)
     step = _number(table, "step", w, DEFAULT_OUTPUT_STEP, low=0.0) or None
@@ -625,7 +625,7 @@ def scene_from_document(data: dict[str, Any], path: Path, base_dir: Path) -> Sce
     _check_site_kinds(clearances, mechanism_path, where)
     initial = _table(data, "initial", where)
     misalignment = _misalignment(initial, clearances, where)
-    output = _output(_table(data, "output", where), joints, where)
+    output = _output(_table(data, "output", where), {c.joint: c.law.result_keys() for c in clearances}, where)
     if output.step is not None:
         solver = dataclasses.replace(solver, output_step=output.step)
     duration = _number(data, "duration", where, required=True, low=0.0, low_open=True)

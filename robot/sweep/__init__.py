@@ -18,7 +18,7 @@ From the shell: ``python scripts/sweep.py SWEEP.toml [--scheduler ADDRESS]
 :mod:`.cli`. Documentation: ``docs/sweep.md``.
 """
 
-from importlib import import_module
+from clearance_contact.lazy import lazy_exports
 
 _PUBLIC = {
     "load_sweep": "robot.sweep.spec",
@@ -33,9 +33,4 @@ _PUBLIC = {
 __all__ = sorted(_PUBLIC)
 
 
-def __getattr__(name: str):
-    if name in _PUBLIC:
-        value = getattr(import_module(_PUBLIC[name]), name)
-        globals()[name] = value
-        return value
-    raise AttributeError(f"module 'robot.sweep' has no attribute {name!r}")
+__getattr__, __dir__ = lazy_exports(__name__, globals(), _PUBLIC)

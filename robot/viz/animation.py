@@ -361,10 +361,12 @@ def sample_frames(mechanism: Mechanism, result: SimulationResult, options: Anima
 # --------------------------------------------------------------------------- geometry helpers
 
 
-def _exaggerated_inner(outer: pin.SE3, inner: pin.SE3, tilt_too: bool, k: float) -> pin.SE3:
-    """Drawn pose of the inner element: displacement from the outer centre times k (and axis tilt if ``tilt_too``)."""
-    position = outer.translation + k * (inner.translation - outer.translation)
-    if not tilt_too or k == 1.0:
+def _exaggerated_inner(outer: pin.SE3, inner: pin.SE3, law_type: type[ClearanceJoint], k: float) -> pin.SE3:
+    """Drawn pose of the inner element: offset from the outer centre magnified by the type
+    (``exaggerated_offset``: times k), and axis tilt if ``EXAGGERATE_TILT``."""
+    offset = law_type.exaggerated_offset(outer.rotation.T @ (inner.translation - outer.translation), k)
+    position = outer.translation + outer.rotation @ offset
+    if not law_type.EXAGGERATE_TILT or k == 1.0:
         return pin.SE3(inner.rotation, position)
     relative = outer.rotation.T @ inner.rotation
     z = relative[:, 2]
@@ -561,8 +563,8 @@ def build_scene(vis, mechanism: Mechanism, result: SimulationResult, options: An
             size = sizes[site.name]
             base = f"{ROOT}/clearance/{site.name}"
             outer, inner = data.oMf[site.outer_frame], data.oMf[site.inner_frame]
-            drawn = _exaggerated_inner(outer, inner, size.joint_type.EXAGGERATE_TILT, k)
-            trails[site.name].append(k * outer.rotation.T @ (inner.translation - outer.translation))
+            drawn = _exaggerated_inner(outer, inner, size.joint_type, k)
+            trails[site.name].append(size.joint_type.exaggerated_offset(outer.rotation.T @ (inner.translation - outer.translation), k))
             for part, pose in (("outer", outer), ("inner", drawn)):
                 frame[f"{base}/{part}"].set_transform(pose.homogeneous)
                 if index == 0:
