@@ -920,6 +920,34 @@ def revolute_kernel(
     return STATUS_OK
 
 
+def _checked_geometry(journal_radius, bearing_inner_radius, bearing_outer_radius, journal_length, bearing_length) -> tuple[float, ...]:
+    """The five dimensions as floats, checked: all positive, R_j < R_b1 < R_b2, L_j > L_b (else ContactParameterError)."""
+    r_j = require_positive("journal_radius", journal_radius)
+    r_b1 = require_positive("bearing_inner_radius", bearing_inner_radius)
+    r_b2 = require_positive("bearing_outer_radius", bearing_outer_radius)
+    l_j = require_positive("journal_length", journal_length)
+    l_b = require_positive("bearing_length", bearing_length)
+    if not r_b1 > r_j:
+        raise ContactParameterError(
+            f"journal_radius={journal_radius!r} must be smaller than bearing_inner_radius="
+            f"{bearing_inner_radius!r} (radial clearance > 0; valid range (0, {r_b1:g}))",
+            key="journal_radius", value=journal_radius,
+        )  # fmt: skip
+    if not r_b2 > r_b1:
+        raise ContactParameterError(
+            f"bearing_outer_radius={bearing_outer_radius!r} must be larger than bearing_inner_radius="
+            f"{bearing_inner_radius!r} (valid range ({r_b1:g}, inf))",
+            key="bearing_outer_radius", value=bearing_outer_radius,
+        )  # fmt: skip
+    if not l_j > l_b:
+        raise ContactParameterError(
+            f"journal_length={journal_length!r} must be larger than bearing_length={bearing_length!r} "
+            f"(axial clearance > 0; valid range ({l_b:g}, inf))",
+            key="journal_length", value=journal_length,
+        )  # fmt: skip
+    return r_j, r_b1, r_b2, l_j, l_b
+
+
 @register_joint_type
 class RevoluteClearanceJoint(ClearanceJoint):
     """Flanged journal (inner element) in a bearing (outer element) with radial and axial clearance.
@@ -1038,26 +1066,7 @@ class RevoluteClearanceJoint(ClearanceJoint):
         radial_law: str = "linear",
         dissipation: str = DEFAULT_DISSIPATION,
     ) -> None:
-        r_j = require_positive("journal_radius", journal_radius)
-        r_b1 = require_positive("bearing_inner_radius", bearing_inner_radius)
-        r_b2 = require_positive("bearing_outer_radius", bearing_outer_radius)
-        l_j = require_positive("journal_length", journal_length)
-        l_b = require_positive("bearing_length", bearing_length)
-        if not r_b1 > r_j:
-            raise ContactParameterError(
-                f"journal_radius={journal_radius!r} must be smaller than bearing_inner_radius="
-                f"{bearing_inner_radius!r} (radial clearance > 0; valid range (0, {r_b1:g}))"
-            )
-        if not r_b2 > r_b1:
-            raise ContactParameterError(
-                f"bearing_outer_radius={bearing_outer_radius!r} must be larger than bearing_inner_radius="
-                f"{bearing_inner_radius!r} (valid range ({r_b1:g}, inf))"
-            )
-        if not l_j > l_b:
-            raise ContactParameterError(
-                f"journal_length={journal_length!r} must be larger than bearing_length={bearing_length!r} "
-                f"(axial clearance > 0; valid range ({l_b:g}, inf))"
-            )
+        r_j, r_b1, r_b2, l_j, l_b = _checked_geometry(journal_radius, bearing_inner_radius, bearing_outer_radius, journal_length, bearing_length)
         require_material("journal_material", journal_material)
         require_material("bearing_material", bearing_material)
         code, friction_parameters = self._wire_friction(friction)
@@ -1096,25 +1105,29 @@ class RevoluteClearanceJoint(ClearanceJoint):
         self._plane_density = k_plane / (math.pi * (r_b2 * r_b2 - r_b1 * r_b1))
         self._disc_rule = _disc_rule(_QUAD_POINTS, n_a)
         self._frictionless = isinstance(friction, NoFriction)
+        self.kernel_parameters = self._pack(code, friction_parameters)
+
+
+    def _pack(self, friction_code: int, friction_parameters: np.ndarray) -> np.ndarray:
+        """``kernel_parameters`` (module docstring's layout) from the validated attributes."""
         parameters = np.zeros(_N_PARAMETERS)
-        parameters[_P_JOURNAL_RADIUS] = r_j
-        parameters[_P_BORE_RADIUS] = r_b1
-        parameters[_P_OUTER_RADIUS] = r_b2
+        parameters[_P_JOURNAL_RADIUS] = self._r_j
+        parameters[_P_BORE_RADIUS] = self._r_b1
+        parameters[_P_OUTER_RADIUS] = self._r_b2
         parameters[_P_HALF_BEARING_LENGTH] = self._half_l_b
         parameters[_P_HALF_JOURNAL_LENGTH] = self._half_l_j
-        parameters[_P_LINE_STIFFNESS] = law.stiffness or 0.0  # informative (the law is at _P_RADIAL_LAW)
+        parameters[_P_LINE_STIFFNESS] = self._radial_law.stiffness or 0.0  # informative (the law is at _P_RADIAL_LAW)
         parameters[_P_PLANE_DENSITY] = self._plane_density
-        parameters[_P_RADIAL_EXPONENT] = law.exponent or 0.0
-        parameters[_P_AXIAL_EXPONENT] = n_a
-        parameters[_P_RESTITUTION] = ce
-        parameters[_P_FRICTION] = code
+        parameters[_P_RADIAL_EXPONENT] = self._radial_law.exponent or 0.0
+        parameters[_P_AXIAL_EXPONENT] = self._n_a
+        parameters[_P_RESTITUTION] = self._restitution
+        parameters[_P_FRICTION] = friction_code
         parameters[_P_FRICTION + 1 : _P_RADIAL_LAW] = friction_parameters
         parameters[_P_RADIAL_LAW:_P_DISSIPATION] = self._radial_law.encoding()
-        parameters[_P_DISSIPATION:_P_QUAD_POINTS] = dissipation_encoding(dissipation, ce)
+        parameters[_P_DISSIPATION:_P_QUAD_POINTS] = dissipation_encoding(self._dissipation, self._restitution)
         parameters[_P_QUAD_POINTS] = _QUAD_POINTS
         parameters[_P_QUAD_RULE:] = self._disc_rule.ravel()
-        self.kernel_parameters = parameters
-
+        return parameters
     @classmethod
     def _from_scene(cls, parameters: dict, outer_material: Material, inner_material: Material, restitution: float, friction: FrictionLaw):
         journal, bearing_length = parameters.pop("journal_radius"), parameters.pop("bearing_length")

@@ -5,11 +5,47 @@ from __future__ import annotations
 import os
 import subprocess
 import sys
+import warnings
 from pathlib import Path
 
 import pytest
 
 from robot.dynamics import equations as D
+from robot.errors import RedundantConstraintWarning
+
+DATA = Path(__file__).resolve().parent / "data"
+
+#: mechanisms of tests/data with closures, ideal or with clearance joints: name -> (mechanism file,
+#: motion-driven joints (constant rate), clearance joints (joint or closure, type)). Revolute closures:
+#: slider_crank, four_bar (3 redundant rows each, planar), mixed_closures (spherical, revolute,
+#: spherical; 3 redundant rows); rssr has spherical closures only (here with a revolute clearance joint).
+CLOSURE_SCENES = {
+    "slider_crank": ("slider_crank.urdf", ("crank",), ()),
+    "slider_crank_rod_clearance": ("slider_crank.urdf", ("crank",), (("crank_rod", "revolute"),)),
+    "four_bar": ("four_bar.urdf", ("crank",), ()),
+    "four_bar_rocker_clearance": ("four_bar.urdf", ("crank",), (("rocker", "revolute"),)),
+    "rssr_rocker_clearance": ("rssr.urdf", ("crank",), (("rocker", "revolute"),)),
+    "mixed": ("mixed_closures.urdf", ("crank", "rs_crank"), ()),
+    "mixed_clearance": ("mixed_closures.urdf", ("crank", "rs_crank"), (("crank_rod", "revolute"), ("Sb", "spherical"))),
+}
+
+_CLEARANCE_KEYS = {
+    "revolute": "journal_radius = 0.005\nradial_clearance = 1.0e-4\nbearing_outer_radius = 0.008\nbearing_length = 0.01\naxial_clearance = 1.0e-4\n",
+    "spherical": "ball_radius = 0.01\nclearance = 1.0e-4\n",
+}
+
+
+def closure_scene(directory: Path, name: str) -> Path:
+    """Write the scene file of :data:`CLOSURE_SCENES` ``name`` into ``directory`` (cranks at 20 rad/s, steel)."""
+    urdf, driven, clearances = CLOSURE_SCENES[name]
+    text = f'name = "{name}"\nmechanism = "{(DATA / urdf).as_posix()}"\nend_effector = "crank"\nduration = 0.05\n'
+    text += '\n[trajectory]\ntype = "joints"\n' + "".join(f"{joint} = {{ offset = 0.0, rate = 20.0 }}\n" for joint in driven)
+    text += "\n[materials.steel]\nyoungs_modulus = 2.07e11\npoisson_ratio = 0.3\n"
+    for joint, kind in clearances:
+        text += f'\n[[clearance]]\njoint = "{joint}"\ntype = "{kind}"\nmaterial = "steel"\nrestitution = 0.9\n' + _CLEARANCE_KEYS[kind]
+    path = directory / f"{name}.toml"
+    path.write_text(text)
+    return path
 
 
 class PythonOnlyLaw:
@@ -51,3 +87,20 @@ def assert_passes_as_plain_python(test_file: str, selection: str, passed: int) -
         cwd=Path(__file__).resolve().parents[1], env=env, capture_output=True, text=True, timeout=300,
     )  # fmt: skip
     assert proc.returncode == 0 and f"{passed} passed" in proc.stdout, proc.stdout[-3000:] + proc.stderr[-3000:]
+
+
+@pytest.fixture(scope="module")
+def scene_runs(tmp_path_factory):
+    """``get(name)``: ``build_run`` of a shipped scene or of a :data:`CLOSURE_SCENES` scene, built once per module."""
+    from robot.run import build_run
+
+    runs = {}
+
+    def get(name):
+        if name not in runs:
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore", RedundantConstraintWarning)
+                runs[name] = build_run(str(closure_scene(tmp_path_factory.mktemp(name), name)) if name in CLOSURE_SCENES else name)
+        return runs[name]
+
+    return get

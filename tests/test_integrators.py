@@ -15,6 +15,7 @@
 from __future__ import annotations
 
 import math
+import warnings
 from pathlib import Path
 
 import numpy as np
@@ -22,6 +23,8 @@ import pinocchio as pin
 import pytest
 
 from clearance_contact import ContactError
+from robot.errors import RedundantConstraintWarning
+from robot.model.description import CLOSURE_TYPES
 from robot.model import constraints as C
 from robot.dynamics import equations as D
 from robot.integration import solvers as I
@@ -31,7 +34,7 @@ from robot.scene.loader import misalignment_rotation
 from robot.integration.simulation import RECORD_OUTPUT, SolverOptions, integrate
 from robot.analysis.studies.speed import reference_state_derivative
 
-from conftest import assert_passes_as_plain_python
+from conftest import CLOSURE_SCENES, assert_passes_as_plain_python
 
 DATA = Path(__file__).resolve().parent / "data"
 LWA = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
@@ -100,39 +103,70 @@ def test_constraint_kernel_revolute_closure_equal_reference():
     _kernel_matches_reference(constraints, states, rng)
 
 
+RHS_SCENES = ["compound_misaligned", *CLOSURE_SCENES]
+
+
 @pytest.mark.parametrize("laws", ["compiled", "python"])
-def test_state_derivative_equals_reference_in_and_out_of_contact(misaligned, with_python_laws, laws):
-    """The compiled path, with the laws' compiled kernels or (``python``) through their Python API."""
-    dynamics = misaligned.dynamics
+@pytest.mark.parametrize("scene", RHS_SCENES)
+def test_state_derivative_equals_reference_in_and_out_of_contact(scene_runs, with_python_laws, laws, scene):
+    """Three formulations of one right-hand side agree: the compiled path (with the laws' compiled
+    kernels or, ``python``, through their Python API), the Python path (constraint kernel views) and
+    the reference composition (``robot.model.constraints``' rows; with redundant closure rows the
+    dense KKT system by least squares). Spherical, revolute and mixed closures, ideal and with
+    clearance joints; in and out of contact."""
+    run = scene_runs(scene)
+    dynamics = run.dynamics
     evaluated = dynamics if laws == "compiled" else with_python_laws(dynamics)
-    workspace = D.make_workspace(evaluated)
+    workspace, python = D.make_workspace(evaluated), D.make_workspace(evaluated)
     assert workspace.compiled is not None
+    python.compiled = None
     assert all((site.law_kernel is None) == (laws == "python") for site in workspace.compiled.sites)
     data = dynamics.mechanism.model.createData()
     rng = np.random.default_rng(3)
     touched = 0
-    for t, y, onset in _random_states(misaligned, rng, 80):
-        try:
-            expected = reference_state_derivative(dynamics, data, t, y, onset)
-        except ContactError:
-            with pytest.raises(ContactError):
-                D.state_derivative(evaluated, workspace, t, y, onset)
-            continue
-        got = D.state_derivative(evaluated, workspace, t, y, onset)
-        touched += bool(expected[-1] != 0.0)
-        np.testing.assert_allclose(got, expected, rtol=1e-11, atol=1e-9 * max(1.0, np.max(np.abs(expected))))
-    assert touched >= 10  # the sample has states in contact (contact power non-zero)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", RedundantConstraintWarning)
+        for t, y, onset in _random_states(run, rng, 80):
+            try:
+                got = D.state_derivative(evaluated, workspace, t, y, onset)
+            except ContactError:
+                with pytest.raises(ContactError):
+                    reference_state_derivative(dynamics, data, t, y, onset)
+                continue
+            expected = reference_state_derivative(dynamics, data, t, y, onset, minimum_norm=not workspace.rows.full)
+            in_contact = expected[dynamics.nq + dynamics.nv + 1] != 0.0  # contact power
+            touched += bool(in_contact)
+            # in contact, rounding: a penetration (~1e-6 m) is a difference of positions (~0.1 m), so one
+            # ulp of q moves the contact force, and f, by up to ~6e-12 of its largest entry
+            atol = (5e-11 if in_contact else 1e-12) * max(1.0, np.max(np.abs(expected)))
+            np.testing.assert_allclose(got, expected, rtol=1e-12, atol=atol)
+            np.testing.assert_allclose(D.state_derivative(evaluated, python, t, y, onset), got, rtol=1e-12, atol=atol)
+            # the rows themselves, redundant ones included: Phi_q, Pinocchio's drift, max |Phi|
+            np.testing.assert_allclose(workspace.compiled.phi_q, python.kernel.phi_q, rtol=0, atol=1e-14)
+            q, v = D.normalise_quaternions(dynamics.mechanism, y[: dynamics.nq]), y[dynamics.nq : dynamics.nq + dynamics.nv]
+            gains = dynamics.baumgarte
+            drift = python.kernel.stabilised_drift(q, v, *python.drive(t), 2.0 * gains.alpha, gains.beta**2)
+            np.testing.assert_allclose(workspace.compiled.drift, drift, rtol=1e-12, atol=1e-12 * np.max(np.abs(drift)))
+            if laws == "compiled":
+                probe = D.contact_probe(evaluated, workspace, t, q, v, onset)
+                assert probe.residual == pytest.approx(np.max(np.abs(python.kernel.residual(q, python.drive(t)[0]))), rel=1e-12, abs=1e-16)
+    if dynamics.contacts:
+        assert touched >= 10  # the sample has states in contact (contact power non-zero)
+    # the planar loops closed by a revolute closure have 3 redundant rows (out of plane, axis rows)
+    assert workspace.rows.full == (scene not in ("slider_crank", "four_bar", "mixed"))
 
 
-def test_compiled_right_hand_side_covers_the_shipped_scenes():
-    """Every shipped scene (spherical closures only) runs the compiled path; revolute closures do not."""
-    for name in ("ideal", "spherical", "revolute", "compound", "compound_misaligned"):
-        dynamics = build_run(name).dynamics
+def test_compiled_right_hand_side_covers_every_closure_type(scene_runs):
+    """Every shipped scene, and mechanisms with revolute and mixed closures, run the compiled path."""
+    assert set(D.COMPILED_CLOSURE_KINDS) == set(CLOSURE_TYPES)
+    shipped = ("ideal", "spherical", "revolute", "compound", "compound_misaligned", "four_bar_revolute", "slider_crank_revolute")
+    for name in (*shipped, *CLOSURE_SCENES):
+        dynamics = scene_runs(name).dynamics
         workspace = D.make_workspace(dynamics)
         assert workspace.compiled is not None, name
         assert all(site.law_kernel is not None for site in workspace.compiled.sites), name  # laws compiled too
-    crank = build_mechanism(DATA / "slider_crank.urdf")
-    assert any(rows.closure.kind == "revolute" for rows in C.constraint_set(crank, driven=True).closures)
+    kinds = [rows.closure.kind for rows in scene_runs("mixed").dynamics.constraints.closures]
+    assert kinds == ["spherical", "revolute", "spherical"]
 
 
 def test_placement_buffer_follows_pinocchio_data(misaligned):
@@ -163,7 +197,7 @@ def test_compiled_sites_report_a_failing_law_with_its_message(misaligned):
 
 def test_compiled_right_hand_side_runs_as_plain_python():
     """``CLEARANCE_CONTACT_JIT=0``: the kernels of ``robot.dynamics.rhs_kernels`` run as Python, same answers."""
-    assert_passes_as_plain_python(__file__, "state_derivative_equals_reference or placement_buffer", 3)
+    assert_passes_as_plain_python(__file__, "state_derivative_equals_reference or placement_buffer", 2 * len(RHS_SCENES) + 1)
 
 
 def test_state_derivative_contact_hint_does_not_change_the_result(misaligned):

@@ -18,6 +18,9 @@ declaration of inputs, parameters and fixed-shape outputs):
 * :mod:`.lyapunov_benettin`: largest Lyapunov exponent of a :class:`Flow`
   (two trajectories, periodic renormalisation; not a function of recorded
   arrays, so not in the registry);
+* :mod:`.simulator_flow` and :mod:`.lyapunov_simulator`: the simulator as a
+  Benettin flow (tangent-space distance, perturbations on the closures) and the
+  registered per-run exponent (``lyapunov_benettin``, needs the run);
 * :mod:`.lyapunov_rosenstein`: largest Lyapunov exponent of a time series
   (``lyapunov_rosenstein``);
 * :mod:`.orbits`: journal / ball centre in the bearing / socket frame (``orbit``);

@@ -15,6 +15,12 @@ An :class:`Analysis` wraps a pure function of arrays (numpy/scipy) and declares
 
 Units: SI; ``[signal]`` stands for the unit of the analysed signal.
 
+An analysis that needs the simulated model itself, not only its arrays (it
+integrates the mechanism again: ``lyapunov_benettin``), declares
+``needs_run=True``: it is called with ``run=`` the :class:`robot.run.Run` as
+well, and a sweep passes each of its inputs the run's array of the same name
+unless the sweep file names another.
+
 ``register(...)`` is the decorator that adds an analysis; :data:`ANALYSES`
 (re-exported by :mod:`robot.analysis`) maps names to analyses and imports the
 built-in analysis modules on first use, so importing the package stays cheap.
@@ -32,7 +38,7 @@ import numpy as np
 from .errors import AnalysisError, UnknownAnalysisError
 
 #: modules of robot.analysis that register analyses (imported on the registry's first use)
-BUILTIN_MODULES = ("poincare", "spectra", "statistics", "orbits", "wear", "lyapunov_rosenstein")
+BUILTIN_MODULES = ("poincare", "spectra", "statistics", "orbits", "wear", "lyapunov_rosenstein", "lyapunov_simulator")
 
 
 @dataclass(frozen=True)
@@ -56,6 +62,7 @@ class Analysis:
     outputs: tuple[Field, ...]
     sizes: Callable[..., dict[str, int]]
     source: str
+    needs_run: bool = False  # called with run= the robot.run.Run too (module docstring)
 
     @property
     def parameters(self) -> dict[str, Any]:
@@ -77,9 +84,10 @@ class Analysis:
     def __call__(self, **arguments: Any) -> dict[str, np.ndarray]:
         """Run on named inputs and parameters; outputs as arrays, checked against the declaration."""
         required = [f.name for f in self.inputs if not f.optional and f.name not in arguments]
+        required += ["run"] if self.needs_run and "run" not in arguments else []
         if required:
             raise AnalysisError(f"analysis {self.name!r} needs the input(s) {required}")
-        known = {f.name for f in self.inputs} | self.parameters.keys()
+        known = {f.name for f in self.inputs} | self.parameters.keys() | ({"run"} if self.needs_run else set())
         unknown = sorted(arguments.keys() - known)
         if unknown:
             raise AnalysisError(f"analysis {self.name!r} has no input or parameter {unknown}; known: {sorted(known)}")
@@ -142,12 +150,13 @@ def register(
     source: str,
     sizes: Callable[..., dict[str, int]] = _no_sizes,
     registry: AnalysisRegistry = ANALYSES,
+    needs_run: bool = False,
 ) -> Callable[[Callable[..., dict[str, Any]]], Callable[..., dict[str, Any]]]:
     """Decorator: register the decorated function as analysis ``name`` (in ``registry``, default
-    :data:`ANALYSES`) and return it unchanged."""
+    :data:`ANALYSES`) and return it unchanged; ``needs_run``: it also takes ``run`` (module docstring)."""
 
     def decorate(function: Callable[..., dict[str, Any]]) -> Callable[..., dict[str, Any]]:
-        registry.add(Analysis(name, function, tuple(inputs), tuple(outputs), sizes, source))
+        registry.add(Analysis(name, function, tuple(inputs), tuple(outputs), sizes, source, needs_run))
         return function
 
     return decorate

@@ -7,9 +7,15 @@ value is checked against the exact relation ``clearance_contact.dissipation.rebo
 Radial laws: the aligned penetration of the R1 journal (20 mm, c_r 0.1 mm, L_b 40 mm,
 steel) under 100 N - 10 kN for each radial law, and its ratio to the linear law's.
 
+Sensitivity (``--table sensitivity``): the tables of the study
+robot/sweep/examples/contact_laws_sensitivity.toml from its store (run it first with
+``clearance sweep``): each radial law with Lankarani-Nikravesh damping, each dissipation
+model with the linear law, percent changes against the scene's laws, and the whole grid.
+
 examples:
-  clearance contact-laws                    # both tables (Markdown)
+  clearance contact-laws                    # rebound and radial tables (Markdown)
   clearance contact-laws --table radial     # only the radial laws' penetrations
+  clearance contact-laws --table sensitivity --store out/sweeps/contact_laws_sensitivity/sweep.zarr
 """
 
 from __future__ import annotations
@@ -68,13 +74,46 @@ def radial_table() -> str:
     return "\n".join(lines)
 
 
+#: columns of the sensitivity tables: (dataset variable, heading, scale to the heading's unit)
+SENSITIVITY_COLUMNS = (
+    ("R1_force_peak", "R1 peak force (kN)", 1e-3),
+    ("S1_force_peak", "S1 peak force (kN)", 1e-3),
+    ("R1_penetration_maximum", "R1 deepest (um)", 1e6),
+    ("S1_penetration_maximum", "S1 deepest (um)", 1e6),
+    ("P5_force_peak", "P5 peak abs. driving force (kN)", 1e-3),
+    ("ee_deviation_peak", "EE deviation peak (mm)", 1e3),
+    ("ee_deviation_rms", "EE deviation RMS (mm)", 1e3),
+)
+#: the scene's laws (compound_misaligned): the reference of the percent changes
+SCENE_RADIAL_LAW, SCENE_DISSIPATION = "linear", "lankarani_nikravesh"
+
+
+def sensitivity_tables(store: str) -> str:
+    from robot.sweep import open_sweep
+    from robot.sweep.sensitivity import grid_table, sensitivity_table
+
+    data = open_sweep(store).compute()
+    by_law = sensitivity_table(data.sel(dissipation=SCENE_DISSIPATION), "radial_law", SENSITIVITY_COLUMNS, SCENE_RADIAL_LAW)
+    by_model = sensitivity_table(data.sel(radial_law=SCENE_RADIAL_LAW), "dissipation", SENSITIVITY_COLUMNS, SCENE_DISSIPATION)
+    grids = [f"{heading}:\n\n" + grid_table(data, variable, "dissipation", "radial_law", scale) for variable, heading, scale in SENSITIVITY_COLUMNS]
+    return "\n\n".join([by_law, by_model, *grids])
+
+
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
-        "--table", choices=("all", "rebound", "radial"), default="all", help="which table to print (default: %(default)s)"
+        "--table", choices=("all", "rebound", "radial", "sensitivity"), default="all",
+        help="which table to print; all = rebound and radial (default: %(default)s)",
+    )
+    parser.add_argument(
+        "--store", default="out/sweeps/contact_laws_sensitivity/sweep.zarr",
+        help="store of the contact_laws_sensitivity sweep, for --table sensitivity (default: %(default)s)",
     )
 
 
 def execute(args: argparse.Namespace) -> int:
+    if args.table == "sensitivity":
+        print(sensitivity_tables(args.store))
+        return EXIT_OK
     tables = {"rebound": rebound_table, "radial": radial_table}
     names = tuple(tables) if args.table == "all" else (args.table,)
     print("\n\n".join(tables[name]() for name in names))

@@ -39,7 +39,7 @@ from robot.cli.common import EXIT_OK, UsageError, number_list, positive_int, pos
 from robot.integration.solvers import JACOBIAN_METHODS, METHODS
 from robot.run import build_run
 from robot.integration.simulation import SolverOptions
-from robot.dynamics.state_jacobian import STRUCTURED
+from robot.integration.options import STRUCTURED
 from robot.scene.loader import shipped_scenes
 from robot.analysis.studies import speed, stability
 from robot.analysis.studies.common import simulate
@@ -99,73 +99,64 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--output-step", type=positive_number, default=1e-4, help="common output grid for pointwise errors (s)")
 
 
-def execute(args: argparse.Namespace) -> int:
+class _Phases:
+    """One invocation's state: the run, the report being written, the output folder, the log."""
 
-    if not (args.realtime_t_end >= 0 and math.isfinite(args.realtime_t_end)):
-        raise UsageError(f"--realtime-t-end={args.realtime_t_end!r} must be a finite number of seconds >= 0")
-    methods = args.methods.split(",") if args.methods else list(METHODS)
-    unknown = [m for m in methods if m not in METHODS]
-    if unknown:
-        raise UsageError(f"--methods: {', '.join(map(repr, unknown))} not on offer; choose from {', '.join(METHODS)}")
-    candidates = _candidates(args.candidates)
-    run = build_run(args.scene)
-    name = run.scene.name
-    out = writable_folder(args.out or Path("results") / "work_precision" / run.scene.file_stem)
-    started = time.perf_counter()
+    def __init__(self, args: argparse.Namespace, run, out: Path):
+        self.args, self.run, self.out = args, run, out
+        self.started = time.perf_counter()
+        self.json_path = out / "work_precision.json"
+        # phases can be run separately (--skip-*): what this invocation computes replaces the
+        # same keys of an existing report of the scene, the rest is kept
+        self.report: dict = json.loads(self.json_path.read_text()) if self.json_path.is_file() else {}
 
-    def say(text: str) -> None:
-        print(f"[{time.perf_counter() - started:7.1f} s] {text}", flush=True)
+    def say(self, text: str) -> None:
+        print(f"[{time.perf_counter() - self.started:7.1f} s] {text}", flush=True)
 
-    json_path = out / "work_precision.json"
-    # phases can be run separately (--skip-*): what this invocation computes replaces the
-    # same keys of an existing report of the scene, the rest is kept
-    report: dict = json.loads(json_path.read_text()) if json_path.is_file() else {}
+    def save(self) -> None:
+        atomic_write_text(self.json_path, json.dumps(_clean(self.report), indent=1, default=_json_default))
 
-    def save() -> None:
-        atomic_write_text(json_path, json.dumps(_clean(report), indent=1, default=_json_default))
+    def header(self) -> None:
+        solver = self.run.scene.solver
+        self.report |= {
+            "scene": self.run.scene.name,
+            "machine": {
+                "python": platform.python_version(),
+                "numpy": np.__version__,
+                "scipy": scipy.__version__,
+                "processor": platform.processor() or platform.machine(),
+                "note": "shared 2-core machine: CPU times are process_time of the integration only; medians where repeated",
+            },
+            "scene_solver": {  # the scene's [solver] table when this report was written
+                "method": solver.method, "rtol": solver.rtol, "atol": solver.atol,
+                "max_step": solver.max_step, "first_step": solver.first_step, "jacobian": solver.jacobian,
+            },
+        }  # fmt: skip
 
-    report |= {
-        "scene": name,
-        "machine": {
-            "python": platform.python_version(),
-            "numpy": np.__version__,
-            "scipy": scipy.__version__,
-            "processor": platform.processor() or platform.machine(),
-            "note": "shared 2-core machine: CPU times are process_time of the integration only; medians where repeated",
-        },
-        "scene_solver": {  # the scene's [solver] table when this report was written
-            "method": run.scene.solver.method,
-            "rtol": run.scene.solver.rtol,
-            "atol": run.scene.solver.atol,
-            "max_step": run.scene.solver.max_step,
-            "first_step": run.scene.solver.first_step,
-            "jacobian": run.scene.solver.jacobian,
-        },
-    }
+    def rhs_benchmark(self) -> None:
+        args, report, say = self.args, self.report, self.say
+        say("right-hand side benchmark")
+        bench = speed.rhs_benchmark(self.run, repeats=7 if not args.quick else 3, number=2000 if not args.quick else 500)
+        report["rhs_benchmark"] = bench
+        # rhs_us: out of contact (the glue's cost); in contact the contact laws add their own
+        quiet = bench.get("no contact", bench["initial"])
+        report["rhs_us"] = quiet["fast"]["median_us"]
+        report["rhs_us_reference_implementation"] = quiet["reference"]["median_us"]
+        if "all joints in contact" in bench:
+            report["rhs_us_all_joints_in_contact"] = bench["all joints in contact"]["fast"]["median_us"]
+        for key, value in bench.items():
+            say(f"  {key}: {value['fast']['median_us']:.1f} us (reference implementation {value['reference']['median_us']:.1f} us)")
+        self.save()
 
-    say("right-hand side benchmark")
-    bench = speed.rhs_benchmark(run, repeats=7 if not args.quick else 3, number=2000 if not args.quick else 500)
-    report["rhs_benchmark"] = bench
-    # rhs_us: out of contact (the glue's cost); in contact the contact laws add their own
-    quiet = bench.get("no contact", bench["initial"])
-    report["rhs_us"] = quiet["fast"]["median_us"]
-    report["rhs_us_reference_implementation"] = quiet["reference"]["median_us"]
-    if "all joints in contact" in bench:
-        report["rhs_us_all_joints_in_contact"] = bench["all joints in contact"]["fast"]["median_us"]
-    for key, value in bench.items():
-        say(f"  {key}: {value['fast']['median_us']:.1f} us (reference implementation {value['reference']['median_us']:.1f} us)")
-
-    save()
-    if not args.skip_sweep:
+    def sweep(self, methods: list[str]) -> None:
+        args, report, say = self.args, self.report, self.say
         report["t_end"] = args.t_end
         report["output_step"] = args.output_step
         say(f"reference solutions over [0, {args.t_end}] s")
-        ref = wp.reference(run, args.t_end, args.output_step)
+        ref = wp.reference(self.run, args.t_end, args.output_step)
         report["reference"] = ref.summary()
         say(f"  comparable window [0, {ref.window:.4g}] s; check vs reference: {ref.agreement}")
-        tolerances = wp.TOLERANCES if not args.quick else (1e-4, 1e-6, 1e-8)
-        if args.tolerances:
-            tolerances = args.tolerances
+        tolerances = args.tolerances or (wp.TOLERANCES if not args.quick else (1e-4, 1e-6, 1e-8))
         steps = wp.STEP_SIZES if not args.quick else {k: v[:2] for k, v in wp.STEP_SIZES.items()}
         if args.steps:
             steps = {k: args.steps for k in wp.STEP_SIZES}
@@ -179,50 +170,55 @@ def execute(args: argparse.Namespace) -> int:
                 f"steps {row['steps']:7d} rhs {row['rhs_calls']:8d} ee {e['ee']:.2e} peak {e['peak_force']:.2e} energy {e['energy']:.2e}"
             )
 
-        rows = wp.run_sweep(run, ref, cases, args.t_end, args.output_step, progress)
+        rows = wp.run_sweep(self.run, ref, cases, args.t_end, args.output_step, progress)
         report["runs"] = rows
         best = wp.cheapest_accurate(rows)
         report["cheapest_accurate"] = best and {k: best[k] for k in ("label", "options", "cpu_time", "steps", "rhs_calls", "errors")}
-        wp.plot(rows, report["reference"], args.t_end, out / "work_precision.png", f"Work-precision, scene {name}")
+        wp.plot(rows, report["reference"], args.t_end, self.out / "work_precision.png", f"Work-precision, scene {self.run.scene.name}")
         say(f"cheapest at engineering accuracy: {best and best['label']}")
-        save()
+        self.save()
 
-    if not args.skip_stability and run.dynamics.contacts:
+    def contact_stability(self) -> None:
+        args, run, say = self.args, self.run, self.say
         say("stability: step size against contact stiffness")
         if args.quick:
             stiff = stability.stiffness_map(args.scene, scales=(0.1, 1.0, 10.0), steps=(5e-5, 1e-5, 2e-6), t_end=0.015, progress=say)
         else:
             stiff = stability.stiffness_map(args.scene, progress=say)
-        stability.plot_stiffness(stiff, out / "stability_stiffness.png")
+        stability.plot_stiffness(stiff, self.out / "stability_stiffness.png")
         say("stability: hidden contact onsets")
         hidden_t = 0.1 if not args.quick else 0.03
         # peaks and onsets of a tight run over the same horizon (DOP853, rtol 1e-10)
         tight = simulate(run, wp.CHECK, hidden_t, label="hidden-contact reference")
-        reference_peaks, reference_onsets = tight.peaks, tight.n_events
         hidden = stability.hidden_contact_map(
             run,
             methods=("RK23", "RK45", "DOP853", "LSODA", "BDF") if not args.quick else ("RK45", "LSODA"),
             tolerances=(1e-2, 1e-3, 1e-4, 1e-5, 1e-6) if not args.quick else (1e-2, 1e-4),
             t_end=hidden_t,
-            reference_peaks=reference_peaks,
-            reference_onsets=reference_onsets,
+            reference_peaks=tight.peaks,
+            reference_onsets=tight.n_events,
             progress=say,
         )
-        stability.plot_hidden(hidden, out / "stability_hidden_contacts.png")
-        report.setdefault("stability", {})["stiffness"] = stiff
-        report["stability"]["hidden_contacts"] = hidden
-        save()
-    if not args.skip_stability:
-        say("stability: Baumgarte gains (ideal mechanism)")
-        if args.quick:
-            gains = stability.baumgarte_map(alphas=(0.0, 5.0, 100.0), betas=(0.0, 5.0, 100.0), cases=(("RK45", 1e-6, None), ("RK4", None, 2e-3)), t_end=0.3, progress=say)
-        else:
-            gains = stability.baumgarte_map(alphas=(0.0, 1.0, 5.0, 20.0, 100.0, 1000.0), betas=(0.0, 1.0, 5.0, 20.0, 100.0, 1000.0), t_end=0.5, progress=say)
-        stability.plot_baumgarte(gains, out / "stability_baumgarte.png")
-        report.setdefault("stability", {})["baumgarte"] = gains
-        save()
+        stability.plot_hidden(hidden, self.out / "stability_hidden_contacts.png")
+        self.report.setdefault("stability", {})["stiffness"] = stiff
+        self.report["stability"]["hidden_contacts"] = hidden
+        self.save()
 
-    if args.realtime_t_end > 0:
+    def baumgarte_stability(self) -> None:
+        self.say("stability: Baumgarte gains (ideal mechanism)")
+        if self.args.quick:
+            gains = stability.baumgarte_map(
+                alphas=(0.0, 5.0, 100.0), betas=(0.0, 5.0, 100.0), cases=(("RK45", 1e-6, None), ("RK4", None, 2e-3)), t_end=0.3, progress=self.say
+            )
+        else:
+            grid = (0.0, 1.0, 5.0, 20.0, 100.0, 1000.0)
+            gains = stability.baumgarte_map(alphas=grid, betas=grid, t_end=0.5, progress=self.say)
+        stability.plot_baumgarte(gains, self.out / "stability_baumgarte.png")
+        self.report.setdefault("stability", {})["baumgarte"] = gains
+        self.save()
+
+    def realtime(self, candidates: list[SolverOptions]) -> None:
+        args, run, report, say = self.args, self.run, self.report, self.say
         say(f"real-time run: the scene's solver over [0, {args.realtime_t_end}] s")
         # first a short run that compiles what the run needs (numba kernels compiled on first use
         # in a process, the contact laws' Jacobian kernels when not yet in numba's disk cache)
@@ -245,23 +241,53 @@ def execute(args: argparse.Namespace) -> int:
             timed.append(other)
             say(f"  {_label(options)}: factor {other['realtime_factor']:.2f} ({other['rhs_calls']} rhs, {other['status'] == 0 and 'ok' or other['cause']})")
         report["realtime_candidates"] = timed
-        save()
-        if args.long_horizon:
-            say(f"long horizon: statistics over [0, {args.realtime_t_end}] s against DOP853 rtol 1e-10")
-            tight = simulate(run, SolverOptions("DOP853", rtol=1e-10, atol=1e-12, max_step=1e-3), args.realtime_t_end, label="DOP853 rtol 1e-10")
-            rows = {}
-            for options in [run.scene.solver] + candidates:
-                outcome = simulate(run, options, args.realtime_t_end, label=_label(options))
-                row = outcome.counts()
-                row["peak_force_relative_to_tight"] = {j: outcome.peaks[j] / tight.peaks[j] - 1.0 for j in tight.peaks}
-                row["impulse_relative_to_tight"] = {j: outcome.impulses[j] / tight.impulses[j] - 1.0 for j in tight.impulses}
-                rows[outcome.label] = row
-                say(f"  {outcome.label}: energy {outcome.energy_error:.2e} J, drift {outcome.max_residual:.2e}, impulses {row['impulse_relative_to_tight']}")
-            report["long_horizon"] = {"t_end": args.realtime_t_end, "tight": tight.counts(), "runs": rows}
-            save()
+        self.save()
 
-    save()
-    say(f"wrote {json_path}")
+    def long_horizon(self, candidates: list[SolverOptions]) -> None:
+        t_end, run = self.args.realtime_t_end, self.run
+        self.say(f"long horizon: statistics over [0, {t_end}] s against DOP853 rtol 1e-10")
+        tight = simulate(run, SolverOptions("DOP853", rtol=1e-10, atol=1e-12, max_step=1e-3), t_end, label="DOP853 rtol 1e-10")
+        rows = {}
+        for options in [run.scene.solver] + candidates:
+            outcome = simulate(run, options, t_end, label=_label(options))
+            row = outcome.counts()
+            row["peak_force_relative_to_tight"] = {j: outcome.peaks[j] / tight.peaks[j] - 1.0 for j in tight.peaks}
+            row["impulse_relative_to_tight"] = {j: outcome.impulses[j] / tight.impulses[j] - 1.0 for j in tight.impulses}
+            rows[outcome.label] = row
+            self.say(f"  {outcome.label}: energy {outcome.energy_error:.2e} J, drift {outcome.max_residual:.2e}, impulses {row['impulse_relative_to_tight']}")
+        self.report["long_horizon"] = {"t_end": t_end, "tight": tight.counts(), "runs": rows}
+        self.save()
+
+
+def _checked_methods(args: argparse.Namespace) -> list[str]:
+    if not (args.realtime_t_end >= 0 and math.isfinite(args.realtime_t_end)):
+        raise UsageError(f"--realtime-t-end={args.realtime_t_end!r} must be a finite number of seconds >= 0")
+    methods = args.methods.split(",") if args.methods else list(METHODS)
+    unknown = [m for m in methods if m not in METHODS]
+    if unknown:
+        raise UsageError(f"--methods: {', '.join(map(repr, unknown))} not on offer; choose from {', '.join(METHODS)}")
+    return methods
+
+
+def execute(args: argparse.Namespace) -> int:
+    methods = _checked_methods(args)
+    candidates = _candidates(args.candidates)  # checked before any run
+    run = build_run(args.scene)
+    phases = _Phases(args, run, writable_folder(args.out or Path("results") / "work_precision" / run.scene.file_stem))
+    phases.header()
+    phases.rhs_benchmark()
+    if not args.skip_sweep:
+        phases.sweep(methods)
+    if not args.skip_stability and run.dynamics.contacts:
+        phases.contact_stability()
+    if not args.skip_stability:
+        phases.baumgarte_stability()
+    if args.realtime_t_end > 0:
+        phases.realtime(candidates)
+        if args.long_horizon:
+            phases.long_horizon(candidates)
+    phases.save()
+    phases.say(f"wrote {phases.json_path}")
     return EXIT_OK
 
 

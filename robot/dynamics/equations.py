@@ -207,10 +207,16 @@ class CompiledSite(NamedTuple):
     wrench_inner: int
 
 
+#: closure kinds whose rows :func:`robot.dynamics.rhs_kernels.closure_drift` computes (3 and 5 rows;
+#: ``tests/test_integrators.py`` checks it covers every type a mechanism file may declare)
+COMPILED_CLOSURE_KINDS = ("spherical", "revolute")
+
+
 class CompiledTerms:
     """Views and index arrays of the compiled right-hand side (:mod:`robot.dynamics.rhs_kernels`) on one ``pin.Data``.
 
-    Applies when every closure is spherical (rows ``p_a - p_b`` first, then the
+    Applies when every closure is spherical or revolute (:data:`COMPILED_CLOSURE_KINDS`:
+    every closure type a mechanism file can declare; rows in constraint-set order, then the
     drivers); otherwise :func:`for_dynamics` returns None and
     :func:`state_derivative` takes the Python path. Redundant rows are handled
     after the kernels: they write every row, :func:`solve_kkt` uses the independent ones. A contact law with a
@@ -222,10 +228,13 @@ class CompiledTerms:
         model = dynamics.mechanism.model
         closures = [rows.closure for rows in dynamics.constraints.closures]
         self.placements = K.placement_buffer(data.oMf)
-        self.jacobian = data.J
-        self.jacobian_rate = data.dJ
+        # views of Pinocchio's buffers; reshaped because eigenpy hands a 6 x 1 matrix (one-dof model) over as (6,)
+        self.jacobian = data.J.reshape(6, model.nv)
+        self.jacobian_rate = data.dJ.reshape(6, model.nv)
         self.frames_a = np.array([c.frame_a for c in closures], dtype=np.int64)
         self.frames_b = np.array([c.frame_b for c in closures], dtype=np.int64)
+        # closure i owns rows closure_rows[i]:closure_rows[i + 1] (3 spherical, 5 revolute); drivers after
+        self.closure_rows = np.array([rows.row for rows in dynamics.constraints.closures] + [kernel.n_closure_rows], dtype=np.int64)
         self.closure_masks = K.support_mask(model, [f for c in closures for f in (c.frame_a, c.frame_b)])
         self.phi_q = kernel.phi_q  # driving rows written once by the kernel
         self.n_closure_rows = kernel.n_closure_rows
@@ -307,13 +316,19 @@ class CompiledTerms:
 
     @classmethod
     def for_dynamics(cls, dynamics: DynamicsModel, data: pin.Data, kernel: C.ConstraintKernel) -> "CompiledTerms | None":
+        """The compiled terms, or None where the kernels do not have the closures' equations.
+
+        :func:`robot.dynamics.rhs_kernels.closure_drift` has the rows of spherical and
+        revolute closures, in constraint-set order; a closure of another kind, or one
+        with a rotation offset on frame b (the misaligned centring rows of the initial
+        assembly, never in a dynamics model), leaves the model to the Python path.
+        """
         constraints = dynamics.constraints
-        if any(rows.closure.kind != "spherical" or rows.rotation_offset_b is not None for rows in constraints.closures):
+        if any(rows.closure.kind not in COMPILED_CLOSURE_KINDS or rows.rotation_offset_b is not None for rows in constraints.closures):
             return None
-        if [rows.row for rows in constraints.closures] != list(range(0, 3 * len(constraints.closures), 3)):
+        offsets = np.cumsum([0] + [rows.closure.n_equations for rows in constraints.closures])
+        if [rows.row for rows in constraints.closures] != offsets[:-1].tolist() or constraints.n_closure_rows != offsets[-1]:
             return None
-        if constraints.n_closure_rows != 3 * len(constraints.closures):
-            return None  # centring rows
         return cls(dynamics, data, kernel)
 
 
@@ -539,8 +554,8 @@ def state_derivative(
     The same equations as :func:`evaluate` (plus :func:`configuration_rate` and the
     actuator and contact powers), on the hot path: quaternions normalised in a
     copy of q, the drive through its interpolation table (:class:`DriveTable`).
-    Mechanisms whose closures are all spherical (every shipped scene) take the
-    compiled path (:class:`CompiledTerms`, :mod:`robot.dynamics.rhs_kernels`: Pinocchio's
+    Mechanisms whose closures are all spherical or revolute (every closure type a
+    mechanism file declares) take the compiled path (:class:`CompiledTerms`, :mod:`robot.dynamics.rhs_kernels`: Pinocchio's
     CRBA, RNEA, joint Jacobians and their rates in C++, the closure rows, frame
     twists, compiled contact laws and ``J^T w`` in numba); others the Python
     path (the constraint kernel's prebound views, a contact law evaluated only
@@ -614,13 +629,14 @@ def _compiled_state_derivative(
     pin.updateFramePlacements(model, data)
     gains = dynamics.baumgarte
     placements, jacobian = compiled.placements, compiled.jacobian
-    K.spherical_closure_drift(
+    K.closure_drift(
         placements,
         jacobian,
         compiled.jacobian_rate,
         compiled.closure_masks,
         compiled.frames_a,
         compiled.frames_b,
+        compiled.closure_rows,
         q,
         v,
         drive,
@@ -718,7 +734,7 @@ def contact_probe(
         pin.updateFramePlacements(model, data)
         worst = math.nan
         if residual:
-            worst = K.largest_residual(compiled.placements, compiled.frames_a, compiled.frames_b, q, workspace.drive.values(t), compiled.actuator_q)
+            worst = K.largest_residual(compiled.placements, compiled.frames_a, compiled.frames_b, compiled.closure_rows, q, workspace.drive.values(t), compiled.actuator_q)
         # compiled.tau receives the (unused) J^T w: every right-hand side starts by zeroing it
         if compiled.fused is not None:
             code = K.probe_sites(

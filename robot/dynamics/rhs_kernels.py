@@ -21,8 +21,12 @@ array view (:func:`placement_buffer`: each ``SE3`` is 9 column-major rotation
 entries then 3 translation entries, contiguous in Pinocchio's aligned vector;
 the layout is verified when the view is made).
 
-The spherical closures' rows are paper eq. (21) (``Phi = p_a - p_b``), the
-driving rows eq. (22) (``Phi = q_k - s_k(t)``), stabilised as in eq. (24):
+The closures' rows are paper eq. (21) (``Phi = p_a - p_b``; spherical and
+revolute closures) and, for a revolute closure, eq. (20) (``z_a . x_b = 0``,
+``z_a . y_b = 0``: the axes stay parallel; their Jacobian and velocity-product
+rows use the frames' angular velocities ``J_ang v`` and accelerations at zero
+joint acceleration ``dJ_ang v``), the driving rows eq. (22)
+(``Phi = q_k - s_k(t)``), stabilised as in eq. (24):
 the kernel returns Pinocchio's ``drift = 2 alpha Phid + beta^2 Phi - gamma``
 (``robot.dynamics.equations`` for the sign convention). ``tests/test_integrators.py``
 checks all of it against the reference functions of ``robot.model.constraints``
@@ -138,36 +142,92 @@ def _point_bias_acceleration(placements, J, dJ, mask_row, frame, v):
 
 
 @jit
-def spherical_closure_drift(
-    placements, J, dJ, masks, frames_a, frames_b, q, v, drive, actuator_q, actuator_v, two_alpha, beta_squared, phi_q, drift
-):
-    """Rows of ``Phi_q`` and Pinocchio's ``drift`` for spherical closures then drivers (module docstring).
+def _point_rows(placements, J, dJ, mask_a, mask_b, fa, fb, v, two_alpha, beta_squared, phi_q, drift, row):
+    """Rows ``row..row+2``: ``Phi = p_a - p_b`` (paper eq. (21)) of a spherical or revolute closure."""
+    nv = J.shape[1]
+    for k in range(3):
+        for c in range(nv):
+            phi_q[row + k, c] = 0.0
+    add_point_jacobian(J, mask_a, placements[fa, 9], placements[fa, 10], placements[fa, 11], 1.0, phi_q, row)
+    add_point_jacobian(J, mask_b, placements[fb, 9], placements[fb, 10], placements[fb, 11], -1.0, phi_q, row)
+    aax, aay, aaz = _point_bias_acceleration(placements, J, dJ, mask_a, fa, v)
+    abx, aby, abz = _point_bias_acceleration(placements, J, dJ, mask_b, fb, v)
+    for k in range(3):
+        rate = 0.0
+        for c in range(nv):
+            rate += phi_q[row + k, c] * v[c]
+        phi = placements[fa, 9 + k] - placements[fb, 9 + k]
+        # gamma = -(a_a - a_b) at zero joint acceleration
+        bias = (aax, aay, aaz)[k] - (abx, aby, abz)[k]
+        drift[row + k] = two_alpha * rate + beta_squared * phi + bias
 
-    ``masks`` rows 2i, 2i+1 are the supports of ``frames_a[i]``, ``frames_b[i]``;
-    ``drive`` = [s, sd, sdd] (3 m values for m actuators). ``phi_q``'s driving
-    rows (constant unit rows) are not touched; its closure rows are overwritten.
+
+@jit
+def _cross(ax, ay, az, bx, by, bz):
+    return ay * bz - az * by, az * bx - ax * bz, ax * by - ay * bx
+
+
+@jit
+def _axis_rows(placements, J, dJ, mask_a, mask_b, fa, fb, v, two_alpha, beta_squared, phi_q, drift, row):
+    """Rows ``row, row+1``: the axis rows ``Phi = z_a . x_b``, ``z_a . y_b`` of a revolute closure (paper eq. (20)).
+
+    With ``n = z_a x e_b`` (``e_b`` = x_b or y_b, columns of frame b's rotation) and the
+    frames' angular velocities ``omega`` and accelerations at zero joint acceleration
+    ``alpha = dJ_ang v``: ``Phi_q = n . (J_ang,a - J_ang,b)`` and
+    ``gamma = -(n . (alpha_a - alpha_b) + n' . (omega_a - omega_b))``,
+    ``n' = (omega_a x z_a) x e_b + z_a x (omega_b x e_b)`` (the reference rows of
+    :func:`robot.model.constraints._closure_gamma`).
     """
     nv = J.shape[1]
+    # column-major rotations: x axis entries 0..2, y axis 3..5, z axis 6..8
+    zx, zy, zz = placements[fa, 6], placements[fa, 7], placements[fa, 8]
+    _, _, _, oax, oay, oaz = _spatial_velocity(J, mask_a, v)
+    _, _, _, obx, oby, obz = _spatial_velocity(J, mask_b, v)
+    _, _, _, lax, lay, laz = _spatial_velocity(dJ, mask_a, v)
+    _, _, _, lbx, lby, lbz = _spatial_velocity(dJ, mask_b, v)
+    zdx, zdy, zdz = _cross(oax, oay, oaz, zx, zy, zz)  # d z_a / dt
+    for k in range(2):
+        ex, ey, ez = placements[fb, 3 * k], placements[fb, 3 * k + 1], placements[fb, 3 * k + 2]
+        nx, ny, nz = _cross(zx, zy, zz, ex, ey, ez)
+        edx, edy, edz = _cross(obx, oby, obz, ex, ey, ez)  # d e_b / dt
+        p1x, p1y, p1z = _cross(zdx, zdy, zdz, ex, ey, ez)
+        p2x, p2y, p2z = _cross(zx, zy, zz, edx, edy, edz)
+        ndx, ndy, ndz = p1x + p2x, p1y + p2y, p1z + p2z
+        r = row + k
+        rate = 0.0
+        for c in range(nv):
+            entry = 0.0
+            if mask_a[c]:
+                entry += nx * J[3, c] + ny * J[4, c] + nz * J[5, c]
+            if mask_b[c]:
+                entry -= nx * J[3, c] + ny * J[4, c] + nz * J[5, c]
+            phi_q[r, c] = entry
+            rate += entry * v[c]
+        phi = zx * ex + zy * ey + zz * ez
+        bias = nx * (lax - lbx) + ny * (lay - lby) + nz * (laz - lbz) + ndx * (oax - obx) + ndy * (oay - oby) + ndz * (oaz - obz)
+        drift[r] = two_alpha * rate + beta_squared * phi + bias
+
+
+@jit
+def closure_drift(
+    placements, J, dJ, masks, frames_a, frames_b, closure_rows, q, v, drive, actuator_q, actuator_v, two_alpha, beta_squared, phi_q, drift
+):
+    """Rows of ``Phi_q`` and Pinocchio's ``drift`` for the closures then the drivers (module docstring).
+
+    Closure i owns rows ``closure_rows[i] .. closure_rows[i + 1] - 1``: 3 (spherical:
+    ``p_a - p_b``) or 5 (revolute: then the two axis rows, :func:`_axis_rows`);
+    the drivers follow from ``closure_rows[-1]``. ``masks`` rows 2i, 2i+1 are the
+    supports of ``frames_a[i]``, ``frames_b[i]``; ``drive`` = [s, sd, sdd] (3 m
+    values for m actuators). ``phi_q``'s driving rows (constant unit rows) are not
+    touched; its closure rows are overwritten.
+    """
     for i in range(frames_a.shape[0]):
-        fa, fb = frames_a[i], frames_b[i]
-        row = 3 * i
-        for k in range(3):
-            for c in range(nv):
-                phi_q[row + k, c] = 0.0
-        add_point_jacobian(J, masks[2 * i], placements[fa, 9], placements[fa, 10], placements[fa, 11], 1.0, phi_q, row)
-        add_point_jacobian(J, masks[2 * i + 1], placements[fb, 9], placements[fb, 10], placements[fb, 11], -1.0, phi_q, row)
-        aax, aay, aaz = _point_bias_acceleration(placements, J, dJ, masks[2 * i], fa, v)
-        abx, aby, abz = _point_bias_acceleration(placements, J, dJ, masks[2 * i + 1], fb, v)
-        for k in range(3):
-            rate = 0.0
-            for c in range(nv):
-                rate += phi_q[row + k, c] * v[c]
-            phi = placements[fa, 9 + k] - placements[fb, 9 + k]
-            # gamma = -(a_a - a_b) at zero joint acceleration
-            bias = (aax, aay, aaz)[k] - (abx, aby, abz)[k]
-            drift[row + k] = two_alpha * rate + beta_squared * phi + bias
+        fa, fb, row = frames_a[i], frames_b[i], closure_rows[i]
+        _point_rows(placements, J, dJ, masks[2 * i], masks[2 * i + 1], fa, fb, v, two_alpha, beta_squared, phi_q, drift, row)
+        if closure_rows[i + 1] - row == 5:
+            _axis_rows(placements, J, dJ, masks[2 * i], masks[2 * i + 1], fa, fb, v, two_alpha, beta_squared, phi_q, drift, row + 3)
     m = actuator_q.shape[0]
-    first = 3 * frames_a.shape[0]
+    first = closure_rows[frames_a.shape[0]]
     for k in range(m):
         phi = q[actuator_q[k]] - drive[k]
         rate = v[actuator_v[k]] - drive[m + k]
@@ -218,15 +278,23 @@ def write_powers(multipliers, first_driving_row, v, actuator_v, tau, out, offset
 
 
 @jit
-def largest_residual(placements, frames_a, frames_b, q, drive, actuator_q):
-    """max |Phi| over the spherical closures (``p_a - p_b``) and the drivers (``q_k - s_k``); NaN if any is NaN."""
+def largest_residual(placements, frames_a, frames_b, closure_rows, q, drive, actuator_q):
+    """max |Phi| over the closures (``p_a - p_b``; a revolute closure's ``z_a . x_b``, ``z_a . y_b``)
+    and the drivers (``q_k - s_k``); NaN if any is NaN."""
     worst = 0.0
     for i in range(frames_a.shape[0]):
+        fa, fb = frames_a[i], frames_b[i]
         for k in range(9, 12):
-            size = abs(placements[frames_a[i], k] - placements[frames_b[i], k])
+            size = abs(placements[fa, k] - placements[fb, k])
             if size != size:
                 return size
             worst = max(worst, size)
+        if closure_rows[i + 1] - closure_rows[i] == 5:
+            for k in range(2):
+                size = abs(placements[fa, 6] * placements[fb, 3 * k] + placements[fa, 7] * placements[fb, 3 * k + 1] + placements[fa, 8] * placements[fb, 3 * k + 2])
+                if size != size:
+                    return size
+                worst = max(worst, size)
     for k in range(actuator_q.shape[0]):
         size = abs(q[actuator_q[k]] - drive[k])
         if size != size:

@@ -73,7 +73,6 @@ from robot.dynamics import equations as D
 from robot.dynamics import jacobian_kernels as JK
 from robot.dynamics import rhs_kernels as K
 
-from robot.integration.options import FINITE_DIFFERENCE, JACOBIAN_CHOICES, STRUCTURED  # noqa: F401 (re-exported)
 
 
 class StateJacobian:

@@ -118,7 +118,10 @@ class EventDrivenIntegrator:
 
     ``outputs``: times also recorded from the dense output (``RECORD_OUTPUT``);
     ``locate_force_peaks``: search each impact's force maximum
-    (``RECORD_FORCE_PEAK``); ``progress(t)`` after every accepted step.
+    (``RECORD_FORCE_PEAK``); ``progress(t)`` after every accepted step;
+    ``onset_rates``: the contact state of a continued run (one per candidate): a
+    candidate in contact at the start keeps its given onset rate (NaN: its current
+    penetration rate, as for a fresh start), see :meth:`start`.
     """
 
     def __init__(
@@ -132,8 +135,10 @@ class EventDrivenIntegrator:
         outputs: OutputTimes | None = None,
         locate_force_peaks: bool = True,
         progress: Callable[[float], None] | None = None,
+        onset_rates: np.ndarray | None = None,
     ):
         self.system, self.options, self.limits = system, options, limits
+        self.initial_onset_rates = None if onset_rates is None else np.asarray(onset_rates, dtype=float).reshape(system.n_candidates)
         self.traits = registry.traits(options.method)
         self.t0, self.t_final = map(float, t_span)
         self.t, self.y = self.t0, system.normalise(np.asarray(y0, dtype=float))
@@ -180,7 +185,13 @@ class EventDrivenIntegrator:
         return self.trajectory(status, cause, message, time.process_time() - started_cpu, time.perf_counter() - started_wall)
 
     def start(self) -> None:
-        """Probe and record the initial state; candidates already in contact start with their current rate."""
+        """Probe and record the initial state; candidates already in contact start with their current rate.
+
+        A continued run (``onset_rates`` given) keeps, for a candidate in contact,
+        the onset rate of the impact in progress: Lankarani-Nikravesh damping
+        depends on the approach speed at the impact's onset, not on the current
+        rate (NaN entries: the current rate).
+        """
         try:
             start = self.probe(self.t, self.y)
         except _Failure as failure:
@@ -190,8 +201,10 @@ class EventDrivenIntegrator:
         if self.outputs is not None:
             for t_out in self.outputs.take(self.t, self.t):
                 self.record(t_out, self.y, R.RECORD_OUTPUT)
+        given = self.initial_onset_rates
         for k in np.flatnonzero(self.pen > 0):
-            self.onset[k] = max(self.rate[k], ONSET_RATE_FLOOR)
+            continued = given is not None and np.isfinite(given[k])
+            self.onset[k] = max(given[k] if continued else self.rate[k], ONSET_RATE_FLOOR)
 
     def start_solver(self) -> None:
         """A new solver from the current state (at the start and after every onset)."""

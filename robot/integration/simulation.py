@@ -138,10 +138,17 @@ def integrate(
     options: SolverOptions = SolverOptions(),
     limits: FailureLimits = FailureLimits(),
     progress: Callable[[float], None] | None = None,
+    *,
+    onset_rates: np.ndarray | None = None,
+    locate_force_peaks: bool = True,
 ) -> Trajectory:
     """Integrate from ``y0`` over ``t_span``; never raises on divergence (see ``status``).
 
     ``y0``: ``[q, v]`` (the work accumulators start at zero) or the whole state.
+    ``onset_rates``: the contact state when continuing a run from one of its
+    records (its ``onset_rates`` row; see ``EventDrivenIntegrator.start``);
+    ``locate_force_peaks``: search each impact's force maximum (off when only the
+    final state matters).
     """
     nq, nv = dynamics.nq, dynamics.nv
     y0 = np.asarray(y0, dtype=float)
@@ -152,4 +159,6 @@ def integrate(
     structured = options.jacobian == STRUCTURED and registry.traits(options.method).takes_jacobian
     system = LagrangeSystem(dynamics, penetration_bounds(dynamics, limits), structured_jacobian=structured)
     outputs = None if options.output_step is None else OutputTimes.grid(options.output_step)
-    return EventDrivenIntegrator(system, y0, t_span, options, limits, outputs=outputs, progress=progress).run()
+    return EventDrivenIntegrator(
+        system, y0, t_span, options, limits, outputs=outputs, locate_force_peaks=locate_force_peaks, progress=progress, onset_rates=onset_rates
+    ).run()

@@ -275,8 +275,9 @@ class ConstraintKernel:
     ) -> np.ndarray:
         """``2 alpha Phid + beta^2 Phi - gamma`` (minus the stabilised right-hand side), ``self.phi_q`` updated.
 
-        The Python right-hand side's form of :meth:`update` (mechanisms with
-        revolute closures; the others use :mod:`robot.dynamics.rhs_kernels`).
+        The Python right-hand side's form of :meth:`update` (mechanisms whose closures
+        the compiled kernels of :mod:`robot.dynamics.rhs_kernels` do not have, and the
+        reference of the compiled path in the tests).
         """
         phi, gam = self.update(q, drive, drive_acceleration)
         phi_dot = self.phi_q @ v

@@ -182,75 +182,83 @@ def reference_configuration(mechanism: Mechanism) -> tuple[np.ndarray, str]:
     return q, f"inverse kinematics of the home pose [x, z, roll, pitch, yaw] = [{pose}], then assembled"
 
 
-def summarize(mechanism: Mechanism, q: np.ndarray | None = None) -> MechanismSummary:
-    """Summary of ``mechanism``; mobility at ``q`` (assembled here when not given)."""
-    model = mechanism.model
-    description = mechanism.description
+def _bodies(mechanism: Mechanism) -> tuple[BodyInfo, ...]:
+    model, description = mechanism.model, mechanism.description
     masses = _link_masses(description.urdf_text)
     bodies = []
     for link in description.links:
         frame = model.frames[model.getFrameId(link, pin.FrameType.BODY)]
         joint = model.names[frame.parentJoint] if frame.parentJoint != 0 else None
         bodies.append(BodyInfo(link, masses.get(link, 0.0), joint))
+    return tuple(bodies)
+
+
+def _joints(mechanism: Mechanism) -> tuple[JointInfo, ...]:
+    model, description = mechanism.model, mechanism.description
     clearance_joints = {s.name for s in mechanism.clearance_sites if s.replaces == "joint"}
     joints = []
     for j in range(1, model.njoints):
         name = model.names[j]
         declaration = description.joints.get(name)
+        shortname = model.joints[j].shortname()
         joints.append(
             JointInfo(
-                name,
-                _JOINT_KINDS.get(model.joints[j].shortname(), model.joints[j].shortname()),
-                declaration.kind if declaration else None,
-                model.nqs[j],
-                model.nvs[j],
-                name in mechanism.actuated_joints,
-                name in clearance_joints,
+                name, _JOINT_KINDS.get(shortname, shortname), declaration.kind if declaration else None, model.nqs[j], model.nvs[j],
+                name in mechanism.actuated_joints, name in clearance_joints,
             )
-        )
+        )  # fmt: skip
+    return tuple(joints)
+
+
+def _closures_and_sites(mechanism: Mechanism) -> tuple[tuple[ClosureInfo, ...], tuple[ClearanceInfo, ...]]:
+    model = mechanism.model
     imposed = {c.name for c in mechanism.closures}
     closures = tuple(
         ClosureInfo(c.name, c.kind, c.parent.link, c.child.link, 3 if c.kind == "spherical" else 5, c.name in imposed)
-        for c in description.closures
+        for c in mechanism.description.closures
     )
     sites = tuple(
         ClearanceInfo(
-            s.name,
-            s.kind,
-            s.replaces,
-            s.outer_on,
-            model.frames[s.outer_frame].name,
-            model.frames[s.inner_frame].name,
+            s.name, s.kind, s.replaces, s.outer_on, model.frames[s.outer_frame].name, model.frames[s.inner_frame].name,
             3 if s.kind == "spherical" else 5,
         )
         for s in mechanism.clearance_sites
-    )
-    grubler_free, grubler_driven = grubler_kutzbach(mechanism)
-    residual = rank_free = rank_driven = mobility_free = mobility_driven = redundant = None
+    )  # fmt: skip
+    return closures, sites
+
+
+def _configuration(mechanism: Mechanism, q: np.ndarray | None) -> tuple[np.ndarray | None, str, float | None]:
+    """The configuration the ranks are taken at (assembled when not given), its description and closure residual."""
     if q is None:
         try:
             guess, configuration = reference_configuration(mechanism)
             assembly = K.assemble(C.constraint_set(mechanism, driven=False, centre_clearance=True), guess)
-            q, residual = assembly.q, assembly.residual_norm
+            return assembly.q, configuration, assembly.residual_norm
         except KinematicsError as exc:
-            configuration = f"no assembled configuration ({exc})"
-    else:
-        configuration = "the configuration given by the caller"
-        data = model.createData()
-        K.update_kinematics(model, data, q)
-        phi = C.residual(C.constraint_set(mechanism, driven=False), data, q, None)
-        residual = float(np.max(np.abs(phi))) if phi.size else 0.0
+            return None, f"no assembled configuration ({exc})", None
+    data = mechanism.model.createData()
+    K.update_kinematics(mechanism.model, data, q)
+    phi = C.residual(C.constraint_set(mechanism, driven=False), data, q, None)
+    return q, "the configuration given by the caller", float(np.max(np.abs(phi))) if phi.size else 0.0
+
+
+def summarize(mechanism: Mechanism, q: np.ndarray | None = None) -> MechanismSummary:
+    """Summary of ``mechanism``; mobility at ``q`` (assembled here when not given)."""
+    model = mechanism.model
+    closures, sites = _closures_and_sites(mechanism)
+    grubler_free, grubler_driven = grubler_kutzbach(mechanism)
+    q, configuration, residual = _configuration(mechanism, q)
+    rank_free = rank_driven = mobility_free = mobility_driven = redundant = None
     if q is not None:
         mobility_free = K.mobility(C.constraint_set(mechanism, driven=False), q)
         mobility_driven = K.mobility(C.constraint_set(mechanism, driven=True), q)
         rank_free, rank_driven = model.nv - mobility_free, model.nv - mobility_driven
         redundant = _redundant_equations(mechanism, q)
-    moving_mass = float(sum(inertia.mass for inertia in model.inertias[1:]))
     return MechanismSummary(
         name=mechanism.name,
-        source=str(description.path) if description.path else "<urdf text>",
-        bodies=tuple(bodies),
-        joints=tuple(joints),
+        source=str(mechanism.description.path) if mechanism.description.path else "<urdf text>",
+        bodies=_bodies(mechanism),
+        joints=_joints(mechanism),
         closures=closures,
         actuated_joints=mechanism.actuated_joints,
         clearance_sites=sites,
@@ -267,7 +275,7 @@ def summarize(mechanism: Mechanism, q: np.ndarray | None = None) -> MechanismSum
         mobility_free=mobility_free,
         mobility_driven=mobility_driven,
         redundant_equations=redundant,
-        moving_mass=moving_mass,
+        moving_mass=float(sum(inertia.mass for inertia in model.inertias[1:])),
         fixed_mass=float(model.inertias[0].mass),
     )
 

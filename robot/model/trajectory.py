@@ -31,8 +31,8 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from robot.model.platform_kinematics import PlatformLayout, leg_kinematics, platform_state
+from robot.scene.loader import POSE_COORDINATES  # the scene schema's coordinate names
 
-POSE_COORDINATES = ("x", "z", "roll", "pitch", "yaw")
 
 
 @dataclass(frozen=True)

@@ -83,6 +83,9 @@ Schema (defaults in brackets)::
     [output]   step [2e-4] (0: every step), keep [all arrays], precision ["float32"] (or "float64"):
                see :class:`OutputSpec`
 
+Every key with its unit, default, valid range and examples: ``docs/scenes.md``
+(``tests/test_scene_docs.py`` checks it names every key accepted here).
+
 The output files are named after ``name`` made safe (:attr:`Scene.file_stem`).
 """
 
@@ -119,6 +122,8 @@ from robot.integration.options import STRUCTURED, FailureLimits, SolverOptions
 from robot.integration.solvers import FIXED_STEP_METHODS, METHODS
 
 SCENE_DIR = Path(__file__).resolve().parent / "scenes"
+#: the platform pose coordinates a platform trajectory prescribes (robot.model.trajectory uses them)
+POSE_COORDINATES = ("x", "z", "roll", "pitch", "yaw")
 
 _TOP_KEYS = {"name", "description", "mechanism", "end_effector", "duration", "gravity", "trajectory", "solver", "baumgarte", "limits", "materials", "clearance", "initial", "output", "extends", "force", "actuators"}
 _OUTPUT_KEYS = {"step", "keep", "precision"}
@@ -135,6 +140,8 @@ _LIMIT_KEYS = {"penetration_ratio", "max_residual", "min_step", "max_wall_time"}
 _MATERIAL_KEYS = {"youngs_modulus", "poisson_ratio"}
 _FRICTION_KEYS = {"law", "static", "dynamic", "transition_velocity", "viscous", "reference_force", "coefficient", "regularisation_velocity"}
 _COORDINATE_KEYS = {"offset", "rate", "amplitudes", "harmonics", "phases"}
+_TRAJECTORY_KEYS = {"type", "period", "preset"}  # besides the coordinates' tables
+_INITIAL_KEYS = {"misalignment_deg", "positions", "velocities"}
 
 
 @dataclass(frozen=True)
@@ -463,7 +470,7 @@ def _output(table: dict, clearance_joints: dict[str, tuple[str, ...]], where: st
         unknown = [k for k in keep if k not in known]
         if unknown:
             raise SceneError(f"{w}: keep names {', '.join(map(repr, unknown))}, not an array of this scene's results; arrays: {', '.join(known)}")
-    precision = table.get("precision", "float64")
+    precision = table.get("precision", "float32")
     if precision not in PRECISIONS:
         raise SceneError(f"{w}: precision={precision!r} must be one of {', '.join(map(repr, PRECISIONS))}")
     return OutputSpec(step, None if keep is None else tuple(keep), precision)
@@ -472,7 +479,7 @@ def _output(table: dict, clearance_joints: dict[str, tuple[str, ...]], where: st
 def _misalignment(initial: dict, clearances: tuple[ClearanceSpec, ...], where: str) -> dict[str, float]:
     """``[initial] misalignment_deg``, each checked against the joint's clearances (:func:`admissible_misalignment`)."""
     w = f"{where} [initial]"
-    _unknown(initial, {"misalignment_deg", "positions", "velocities"}, w)
+    _unknown(initial, _INITIAL_KEYS, w)
     misalignment = initial.get("misalignment_deg", {})
     if not isinstance(misalignment, dict):
         raise SceneError(f"{w}: misalignment_deg={misalignment!r} must be a table {{JOINT = degrees}}")
@@ -524,10 +531,8 @@ def _trajectory(table: dict, where: str, base_dir: Path | None = None) -> Trajec
         raise SceneError(f"{w}: type={kind!r} must be 'platform' or 'joints'", key="type", value=kind)
     period = _number(table, "period", w, 1.0, low=0.0, low_open=True)
     preset = table.get("preset")
-    coordinates = {k: v for k, v in table.items() if k not in ("type", "period", "preset")}
+    coordinates = {k: v for k, v in table.items() if k not in _TRAJECTORY_KEYS}
     if kind == "platform":
-        from robot.model.trajectory import POSE_COORDINATES
-
         _unknown(coordinates, set(POSE_COORDINATES), w)
         if preset not in (None, "reference"):
             raise SceneError(f"{w}: preset={preset!r} is not known; use 'reference' or give x, z, roll, pitch, yaw", key="preset", value=preset)

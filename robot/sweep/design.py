@@ -31,7 +31,9 @@ SAMPLE_DIM = "sample"
 @dataclass(frozen=True)
 class Axis:
     """One swept scene key: ``key`` (dotted path), ``name`` (dataset coordinate),
-    ``values`` (grid designs) or ``low``/``high``/``scale`` (sampled designs)."""
+    ``values`` (grid designs: numbers, strings such as law names, booleans) or
+    ``low``/``high``/``scale`` (sampled designs). ``linked`` keys take the same value
+    as ``key`` at every point (one dissipation model for every clearance joint)."""
 
     key: str
     name: str
@@ -39,6 +41,12 @@ class Axis:
     low: float = float("nan")
     high: float = float("nan")
     scale: str = "linear"
+    linked: tuple[str, ...] = ()
+
+    @property
+    def keys(self) -> tuple[str, ...]:
+        """Every scene key this axis sets."""
+        return (self.key, *self.linked)
 
 
 @dataclass(frozen=True)
@@ -71,7 +79,7 @@ def python_value(value: Any) -> Any:
 
 def grid_design(axes: tuple[Axis, ...]) -> Design:
     coords = {a.name: ((a.name,), np.asarray(a.values)) for a in axes}
-    points = tuple({a.key: python_value(v) for a, v in zip(axes, combo)} for combo in itertools.product(*(a.values for a in axes)))
+    points = tuple({k: python_value(v) for a, v in zip(axes, combo) for k in a.keys} for combo in itertools.product(*(a.values for a in axes)))
     return Design(GRID, tuple(a.name for a in axes), tuple(len(a.values) for a in axes), coords, points)
 
 
@@ -95,5 +103,5 @@ def sampled_design(kind: str, axes: tuple[Axis, ...], count: int, seed: int) -> 
             columns[axis.name] = axis.low + unit[:, j] * (axis.high - axis.low)
     coords = {SAMPLE_DIM: ((SAMPLE_DIM,), np.arange(count))}
     coords.update({a.name: ((SAMPLE_DIM,), columns[a.name]) for a in axes})
-    points = tuple({a.key: float(columns[a.name][i]) for a in axes} for i in range(count))
+    points = tuple({k: float(columns[a.name][i]) for a in axes for k in a.keys} for i in range(count))
     return Design(kind, (SAMPLE_DIM,), (count,), coords, points)

@@ -133,7 +133,7 @@ def store_attrs(spec: SweepSpec) -> dict[str, Any]:
         "design": spec.design.kind,
         "scene": spec.base.name,
         "t_end": spec.t_end,
-        "axes": {a.name: a.key for a in spec.axes},
+        "axes": {a.name: a.key if not a.linked else list(a.keys) for a in spec.axes},
         "coordinates": list(spec.design.coords),
         "overrides": {k: v for k, v in spec.overrides.items()},
         "analyses": [a.canonical() for a in spec.analyses],

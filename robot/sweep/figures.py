@@ -13,7 +13,14 @@ value; unselected axes take their first value):
 * ``waterfall``: spectra ``amplitude`` over ``frequency`` stacked along ``x``;
 * ``orbit``: a kept eccentricity ``array`` (columns x, y) divided by the
   clearance at the scene key ``clearance``, one panel per value of ``x``
-  (at most ``panels``).
+  (at most ``panels``);
+* ``sensitivity``: grouped bars, one group per value of axis ``x`` (a law
+  name, any category), one bar per scalar variable of ``values``: its percent
+  change against the run at ``x = reference`` (default: the first value),
+  :mod:`robot.sweep.sensitivity`; a failed run is marked "failed".
+
+Axes of strings (law names) are drawn as categories: ``map`` puts one cell per
+name, ``lines`` one tick per name.
 
 The PNGs use :mod:`robot.analysis.figures`; the same data feed the HTML report
 (:mod:`robot.sweep.report`). Each drawing function returns ``(title, traces)``
@@ -54,8 +61,28 @@ def selected(dataset, figure: dict, keep: tuple[str, ...]):
     for dim in dataset.attrs.get("coordinates", []):
         if dim in keep or dim not in out.dims or dim == SAMPLE_DIM:
             continue
-        out = out.sel({dim: selection[dim]}, method="nearest") if dim in selection else out.isel({dim: 0})
+        if dim not in selection:
+            out = out.isel({dim: 0})
+        elif out[dim].dtype.kind in "biuf":
+            out = out.sel({dim: selection[dim]}, method="nearest")
+        elif str(selection[dim]) in [str(v) for v in out[dim].values]:
+            out = out.sel({dim: selection[dim]})  # names (law names) are chosen exactly
+        else:
+            raise SweepError(f"figure select: {dim}={selection[dim]!r} is not a value of the axis ({', '.join(map(str, out[dim].values))})", key=f"figure.select.{dim}", value=selection[dim])
     return out
+
+
+def _label(value) -> str:
+    """An axis value as text: numbers in %g, names as they are."""
+    return f"{value:g}" if isinstance(value, (int, float, np.number)) and not isinstance(value, bool) else str(value)
+
+
+def _positions(values) -> tuple[np.ndarray, list[str] | None]:
+    """Plot positions of an axis's values: the values if numeric, else 0, 1, ... with the names as tick labels."""
+    values = np.asarray(values)
+    if values.dtype.kind in "biuf":
+        return values, None
+    return np.arange(len(values), dtype=float), [str(v) for v in values]
 
 
 def draw_lines(dataset, figure: dict, out: Path):
@@ -66,13 +93,16 @@ def draw_lines(dataset, figure: dict, out: Path):
     plot = new_figure()
     axes = plot.add_subplot()
     traces = []
+    positions, names = _positions(data[x].values)
     for value in figure["values"]:
-        curves = [(None, data[value])] if by is None else [(f"{by}={b:g}", data[value].sel({by: b})) for b in data[by].values]
+        curves = [(None, data[value])] if by is None else [(f"{by}={_label(b)}", data[value].sel({by: b})) for b in data[by].values]
         for label, curve in curves:
             name = value if label is None else f"{value}, {label}"
-            axes.plot(data[x].values, curve.values, marker="o", markersize=3, label=name)
+            axes.plot(positions, curve.transpose(x).values, marker="o", markersize=3, label=name)
             traces.append({"type": "line", "x": data[x].values, "y": curve.values, "name": name})
     axes.set(xlabel=x, xscale=figure.get("x_scale", "linear"), yscale=figure.get("y_scale", "linear"))
+    if names is not None:
+        axes.set_xticks(positions, names, rotation=20, fontsize=8)
     axes.legend(fontsize=7)
     return plot, traces
 
@@ -94,7 +124,14 @@ def draw_map(dataset, figure: dict, out: Path):
         return plot, [{"type": "scatter_map", "x": dataset[x].values, "y": dataset[y].values, "z": values, "name": value}]
     data = selected(dataset, figure, (x, y))
     z = data[value].transpose(y, x).values
-    plot = map_figure(data[x].values, data[y].values, z, x_label=x, y_label=y, value_label=value, log_scale=log)
+    (x_positions, x_names), (y_positions, y_names) = _positions(data[x].values), _positions(data[y].values)
+    plot = map_figure(x_positions, y_positions, z, x_label=x, y_label=y, value_label=value, log_scale=log)
+    if x_names is not None:
+        plot.axes[0].set_xticks(x_positions, x_names, rotation=20, fontsize=8)
+    if y_names is not None:
+        plot.axes[0].set_yticks(y_positions, y_names, fontsize=8)
+    if x_names is not None or y_names is not None:
+        plot.tight_layout(rect=(0.0, 0.0, 1.0, 0.95))  # room for the names and the title
     return plot, [{"type": "heatmap", "x": data[x].values, "y": data[y].values, "z": z, "name": value}]
 
 
@@ -139,12 +176,42 @@ def draw_orbit(dataset, figure: dict, out: Path, clearance_of: Callable[[dict], 
     return orbit_figure(orbits, clearances), traces
 
 
+def draw_sensitivity(dataset, figure: dict, out: Path):
+    from robot.analysis.figures import new_figure
+    from robot.sweep.sensitivity import relative_change
+
+    x, values = figure["x"], figure["values"]
+    data = selected(dataset, figure, (x,))
+    categories = [str(c) for c in data[x].values]
+    reference = figure.get("reference", categories[0])
+    positions = np.arange(len(categories), dtype=float)
+    width = 0.8 / len(values)
+    plot = new_figure(7.5, 4.2)
+    axes = plot.add_subplot()
+    traces = []
+    for k, value in enumerate(values):
+        change = relative_change(data, value, x, reference)
+        axes.bar(positions + (k - (len(values) - 1) / 2) * width, np.nan_to_num(change), width, label=value)
+        traces.append({"type": "bar", "x": categories, "y": change, "name": value})
+    failed = [i for i, c in enumerate(categories) if int(data["status"].transpose(x).values[i]) != 0]
+    for i in failed:
+        axes.annotate("failed", (positions[i], 0.0), ha="center", va="bottom", color="red", fontsize=8)
+    axes.axhline(0.0, color="black", linewidth=0.6)
+    axes.set_xticks(positions, categories, rotation=15, fontsize=8)
+    axes.set(xlabel=x, ylabel=f"change against {x} = {reference} (%)")
+    axes.grid(axis="y", linewidth=0.3)
+    axes.legend(fontsize=7)
+    plot.tight_layout(rect=(0.0, 0.0, 1.0, 0.94))  # room for the title
+    return plot, traces
+
+
 FIGURES: dict[str, FigureKind] = {
     "lines": FigureKind(frozenset({"x", "values", "by", "x_scale", "y_scale"}), frozenset({"x", "values"}), draw_lines),
     "map": FigureKind(frozenset({"x", "y", "value", "log_color"}), frozenset({"x", "y", "value"}), draw_map),
     "bifurcation": FigureKind(frozenset({"x", "points", "component"}), frozenset({"x", "points"}), draw_bifurcation, grid_only=True),
     "waterfall": FigureKind(frozenset({"x", "frequency", "amplitude"}), frozenset({"x", "frequency", "amplitude"}), draw_waterfall, grid_only=True),
     "orbit": FigureKind(frozenset({"x", "array", "clearance", "panels"}), frozenset({"x", "array", "clearance"}), draw_orbit, grid_only=True),
+    "sensitivity": FigureKind(frozenset({"x", "values", "reference"}), frozenset({"x", "values"}), draw_sensitivity, grid_only=True),
 }
 
 
@@ -180,6 +247,10 @@ def check_figures(spec) -> None:
         for key in ("value", "points", "frequency", "amplitude", "array"):
             if key in figure and figure[key] not in variables:
                 raise SweepError(f"figure {name!r}: {key}={figure[key]!r} is not a variable of this sweep ({', '.join(sorted(variables))})", key=f"figure.{key}", value=figure[key])
+        if "reference" in figure:
+            axis = next(a for a in spec.axes if a.name == figure["x"])
+            if figure["reference"] not in axis.values:
+                raise SweepError(f"figure {name!r}: reference={figure['reference']!r} is not a value of axis {axis.name!r} ({', '.join(map(str, axis.values))})", key="figure.reference", value=figure["reference"])
         for value in figure.get("values", []):
             if value not in variables:
                 raise SweepError(f"figure {name!r}: values has {value!r}, not a variable of this sweep", key="figure.values", value=value)

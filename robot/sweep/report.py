@@ -21,7 +21,7 @@ def _clearance_of(spec, figure: dict):
     from robot.scene.overrides import document_value
 
     key = figure["clearance"]
-    axis = next((a.name for a in spec.axes if a.key == key), None)
+    axis = next((a.name for a in spec.axes if key in a.keys), None)
 
     def clearance(selection: dict) -> float:
         if axis is not None and axis in selection:
@@ -47,6 +47,8 @@ def plotly_figure(title: str, traces: list[dict]):
             figure.add_trace(go.Scattergl(x=trace["x"], y=trace["y"], mode="markers", marker={"size": 3, "color": "black"}, name=name))
         elif kind == "orbit":
             figure.add_trace(go.Scatter(x=trace["x"], y=trace["y"], mode="lines", name=name))
+        elif kind == "bar":
+            figure.add_trace(go.Bar(x=trace["x"], y=trace["y"], name=name))
     if any(t["type"] == "orbit" for t in traces):
         angle = np.linspace(0, 2 * np.pi, 200)
         figure.add_trace(go.Scatter(x=np.cos(angle), y=np.sin(angle), mode="lines", line={"dash": "dash", "color": "gray"}, name="clearance"))
@@ -86,7 +88,7 @@ def draw_all(spec, store: Path, out: Path) -> list[Path]:
         written.append(save_png(plot, out / "figures" / f"{i:02d}_{figure['kind']}.png"))
         sections.append(plotly_figure(title, traces).to_html(full_html=False, include_plotlyjs="inline" if first else False))
         first = False
-    axes = ", ".join(f"{a.name} ({a.key})" for a in spec.axes)
+    axes = ", ".join(f"{a.name} ({', '.join(a.keys)})" for a in spec.axes)
     page = (
         f"<!DOCTYPE html><html><head><meta charset='utf-8'><title>sweep {html.escape(spec.name)}</title>"
         "<style>body{font-family:sans-serif;margin:2em} table{border-collapse:collapse} td,th{border:1px solid #ccc;padding:2px 6px;font-size:12px}</style>"

@@ -14,9 +14,9 @@ Schema (defaults in brackets; ``docs/sweep.md`` has the full description)::
     "solver.rtol" = 1e-6
 
     [[axis]]                       # one per swept scene key
-    key = "clearance.R1.radial_clearance"
-    name = "radial_clearance"      # [the key, '.' -> '_'] dataset coordinate
-    values = [1e-5, 1e-4]          # grid: a list, or
+    key = "clearance.R1.radial_clearance"   # or a list of keys set to the same value
+    name = "radial_clearance"      # [the key, '.' -> '_'; required for a list] dataset coordinate
+    values = [1e-5, 1e-4]          # grid: a list (numbers, or strings: law names), or
     # linear = {start, stop, num} / log = {start, stop, num}
     # sampled: range = [low, high], scale = "linear" | "log"
 
@@ -132,7 +132,7 @@ class SweepSpec:
     def layout_key(self) -> str:
         """Hash of what fixes the store's shape: dimensions, coordinates, outputs."""
         coords = {name: [dims, np.asarray(values).tolist()] for name, (dims, values) in self.design.coords.items()}
-        return digest({"dims": self.design.dims, "shape": self.design.shape, "coords": coords, "axes": [a.key for a in self.axes], "outputs": self.outputs_canonical()})
+        return digest({"dims": self.design.dims, "shape": self.design.shape, "coords": coords, "axes": [a.key if not a.linked else list(a.keys) for a in self.axes], "outputs": self.outputs_canonical()})
 
 
 def digest(value: Any) -> str:
@@ -200,6 +200,14 @@ def _sample_range(table: dict, key: str, where: str) -> tuple[float, float, str]
     return float(bounds[0]), float(bounds[1]), scale
 
 
+def _axis_keys(given: Any, where: str) -> tuple[str, tuple[str, ...]]:
+    """An axis's ``key``: one dotted path, or a list of paths set to the same value (linked)."""
+    keys = given if isinstance(given, list) else [given]
+    if not keys or not all(isinstance(k, str) and k for k in keys):
+        raise SweepError(f"{where}: [[axis]] needs key = \"SCENE.KEY.PATH\" or a list of them, got {given!r}", key="axis.key", value=given)
+    return keys[0], tuple(keys[1:])
+
+
 def _axes(data: dict, design: str, where: str) -> tuple[Axis, ...]:
     tables = data.get("axis", [])
     if not isinstance(tables, list) or not tables:
@@ -209,11 +217,11 @@ def _axes(data: dict, design: str, where: str) -> tuple[Axis, ...]:
         if not isinstance(table, dict):
             raise SweepError(f"{where}: [[axis]] entries must be tables", key="axis", value=table)
         unknown = sorted(set(table) - _AXIS)
-        key = table.get("key")
-        if not isinstance(key, str) or not key:
-            raise SweepError(f"{where}: [[axis]] needs key = \"SCENE.KEY.PATH\"", key="axis.key", value=key)
+        key, linked = _axis_keys(table.get("key"), where)
         if unknown:
             raise SweepError(f"{where}: axis {key!r}: unknown key(s) {', '.join(unknown)}; valid keys: {', '.join(sorted(_AXIS))}", key=key, value=unknown[0])
+        if linked and "name" not in table:
+            raise SweepError(f"{where}: axis {[key, *linked]!r} sets several keys and needs name = \"COORDINATE\"", key=key, value=None)
         name = table.get("name", key.replace(".", "_"))
         if not isinstance(name, str) or not name.isidentifier() or name in names or name == "sample":
             raise SweepError(f"{where}: axis {key!r}: name={name!r} must be a unique identifier other than 'sample'", key=key, value=name)
@@ -221,14 +229,15 @@ def _axes(data: dict, design: str, where: str) -> tuple[Axis, ...]:
         if design == GRID:
             if "range" in table or "scale" in table:
                 raise SweepError(f"{where}: axis {key!r}: range/scale are for sampled designs; a grid axis takes values, linear or log", key=key, value=table.get("range"))
-            axes.append(Axis(key, name, values=_grid_values(table, key, where)))
+            axes.append(Axis(key, name, values=_grid_values(table, key, where), linked=linked))
         else:
             if any(k in table for k in ("values", "linear", "log")):
                 raise SweepError(f"{where}: axis {key!r}: a {design} design samples range = [low, high]; values/linear/log are for grids", key=key, value=None)
             low, high, scale = _sample_range(table, key, where)
-            axes.append(Axis(key, name, low=low, high=high, scale=scale))
-    if len({a.key for a in axes}) != len(axes):
-        raise SweepError(f"{where}: a key is swept by two axes: {[a.key for a in axes]}", key="axis", value=[a.key for a in axes])
+            axes.append(Axis(key, name, low=low, high=high, scale=scale, linked=linked))
+    keys = [k for a in axes for k in a.keys]
+    if len(set(keys)) != len(keys):
+        raise SweepError(f"{where}: a key is swept twice: {keys}", key="axis", value=keys)
     return tuple(axes)
 
 
@@ -238,7 +247,8 @@ def default_statistics(scene: Scene) -> dict[str, str]:
     for joint in scene.clearance_joints:
         signals[f"{joint}_force"] = f"{joint}_normal_force:sum"
         signals[f"{joint}_penetration"] = f"{joint}_penetration:max"
-    signals["driving_force"] = "driving_force:maxabs"
+    if scene.trajectory.kind == "platform" or scene.trajectory.coordinates:  # else no motion-driven joint: no driving force
+        signals["driving_force"] = "driving_force:maxabs"
     signals["ee_acceleration"] = "ee_acceleration:norm"
     return signals
 
@@ -273,8 +283,10 @@ def _analysis(table: Any, where: str) -> AnalysisSpec:
         known = ", ".join(sorted(input_names | set(parameters)))
         raise SweepError(f"{w}: {unknown[0]}={table[unknown[0]]!r} is neither an input nor a parameter of {name!r} ({known})", key=f"{label}.{unknown[0]}", value=table[unknown[0]])
     given = {k: v for k, v in table.items() if k in input_names}
-    if "t" in input_names:
-        given.setdefault("t", "t")
+    # inputs named after the run's own arrays: t always; every input of an analysis that needs the run
+    for f in analysis.inputs:
+        if f.name == "t" or analysis.needs_run:
+            given.setdefault(f.name, f.name)
     missing = [f.name for f in analysis.inputs if not f.optional and f.name not in given]
     missing += [p for p, default in parameters.items() if default is inspect.Parameter.empty and p not in table]
     if missing:
@@ -307,8 +319,9 @@ def _resolve_scenes(base: Scene, axes: tuple[Axis, ...], design: Design) -> tupl
     """Validate every axis value alone (errors name the axis), then every point."""
     if design.kind == GRID:
         for axis in axes:
-            for value in axis.values:
-                _scene_with(base, {axis.key: value}, f"axis {axis.key!r}", axis.key, value)
+            for key in axis.keys:
+                for value in axis.values:
+                    _scene_with(base, {key: value}, f"axis {key!r}", key, value)
     scenes = []
     for i, point in enumerate(design.points):
         try:

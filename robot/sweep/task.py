@@ -102,8 +102,11 @@ def analyse(task: RunTask, signals, layout: Layout) -> tuple[np.ndarray, dict[st
     position = {name: i for i, name in enumerate(layout.statistics)}
     series = {}
     for spec in task.analyses:
+        analysis = ANALYSES[spec.name]
         arguments = {name: selector(signals) for name, selector in spec.inputs.items()}
-        outputs = ANALYSES[spec.name](**arguments, **resolve_parameters(spec, task.document))
+        if analysis.needs_run:
+            arguments["run"] = signals.run
+        outputs = analysis(**arguments, **resolve_parameters(spec, task.document))
         for output, value in outputs.items():
             name = f"{spec.label}_{output}"
             if name in position:

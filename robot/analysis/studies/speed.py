@@ -33,8 +33,16 @@ from robot.integration.simulation import SolverOptions, initial_onset_rates, int
 LWA = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
 
 
-def reference_state_derivative(dynamics: D.DynamicsModel, data: pin.Data, t: float, y: np.ndarray, onset: np.ndarray) -> np.ndarray:
-    """dy/dt by the reference functions (no fast path): the oracle of the fast right-hand side."""
+def reference_state_derivative(
+    dynamics: D.DynamicsModel, data: pin.Data, t: float, y: np.ndarray, onset: np.ndarray, minimum_norm: bool = False
+) -> np.ndarray:
+    """dy/dt by the reference functions (no fast path): the oracle of the fast right-hand side.
+
+    ``minimum_norm``: solve the KKT system of paper eq. (24) as one dense least-squares
+    problem on every row (:func:`_dense_kkt`) instead of Pinocchio's ``forwardDynamics``,
+    for mechanisms with redundant closure rows (exact for a consistent system; independent
+    of the row selection of :mod:`robot.model.redundancy`).
+    """
     mechanism = dynamics.mechanism
     model = mechanism.model
     nq, nv = dynamics.nq, dynamics.nv
@@ -57,8 +65,11 @@ def reference_state_derivative(dynamics: D.DynamicsModel, data: pin.Data, t: flo
             tau += pin.getFrameJacobian(model, data, site.outer_frame, LWA).T @ result.wrench_outer
             tau += pin.getFrameJacobian(model, data, site.inner_frame, LWA).T @ result.wrench_inner
     applied = np.zeros(nv) if dynamics.forces is None else dynamics.forces.bind(model, data).evaluate(t, q, v)
-    qdd = pin.forwardDynamics(model, data, tau + applied, phi_q, -rhs).copy()
-    multipliers = -data.lambda_c.copy()
+    if minimum_norm:
+        qdd, multipliers = _dense_kkt(model, data, q, tau + applied, phi_q, rhs)
+    else:
+        qdd = pin.forwardDynamics(model, data, tau + applied, phi_q, -rhs).copy()
+        multipliers = -data.lambda_c.copy()
     driving_force = -multipliers[constraints.driving_rows]
     actuator = np.zeros(nv) if dynamics.forces is None else sum((_element_force(e, model, data, t, q, v) for e in dynamics.forces.elements if e.actuator), np.zeros(nv))
     out = np.empty(dynamics.state_size)
@@ -69,6 +80,20 @@ def reference_state_derivative(dynamics: D.DynamicsModel, data: pin.Data, t: flo
     if dynamics.forces is not None:
         out[nq + nv + 2] = (applied - actuator) @ v
     return out
+
+
+def _dense_kkt(model: pin.Model, data: pin.Data, q: np.ndarray, tau: np.ndarray, phi_q: np.ndarray, rhs: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(qdd, lambda) of ``[M Phi_q^T; Phi_q 0] [qdd; lambda] = [tau - h; rhs]`` by least squares.
+
+    Paper eq. (24) with every row, redundant ones included: for a consistent system qdd is
+    unique and the multipliers are the minimum-norm ones. Needs ``computeAllTerms`` at (q, v).
+    """
+    mass = pin.crba(model, data, q)
+    mass = np.triu(mass) + np.triu(mass, 1).T
+    n, m = model.nv, phi_q.shape[0]
+    matrix = np.block([[mass, phi_q.T], [phi_q, np.zeros((m, m))]])
+    solution, *_ = np.linalg.lstsq(matrix, np.concatenate([tau - data.nle, rhs]), rcond=None)
+    return solution[:n], solution[n:]
 
 
 def _element_force(element, model: pin.Model, data: pin.Data, t: float, q: np.ndarray, v: np.ndarray) -> np.ndarray:
