@@ -30,6 +30,8 @@ CASES = {
     "slider-crank, revolute clearance": ("slider_crank_revolute", {}, 0.05),
     "four-bar, revolute clearance": ("four_bar_revolute", {}, 0.05),
     "force elements": ("free_two_link_spring", {}, 0.05),
+    # revolute closures: redundant rows, the KKT solve on the independent ones
+    "four-bar, ideal": ("four_bar", {}, 0.05),
     # parameters away from the shipped ones: larger clearances, softer restitution, another ball
     "other parameters": (
         "compound",

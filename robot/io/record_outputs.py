@@ -121,6 +121,7 @@ def compiled_outputs(
     actuator_power, contact_power = arrays["actuator_power"], arrays["contact_power"]
     frame, drive = dynamics.end_effector_frame, workspace.drive
     frames_a, frames_b, actuator_q, placements = compiled.frames_a, compiled.frames_b, compiled.actuator_q, compiled.placements
+    closure_rows = compiled.closure_rows
     # per record the placements (rotation, then translation) of every clearance joint's two element frames
     site_frames = np.array([[c.site.outer_frame, c.site.inner_frame] for c in dynamics.contacts], dtype=np.int64).reshape(-1)
     poses = np.empty((n, site_frames.shape[0], K.SE3_FLOATS))
@@ -136,7 +137,7 @@ def compiled_outputs(
         actuator_power[i], contact_power[i] = rate[nq + nv], rate[nq + nv + 1]
         if forces is not None:
             arrays["force_scalars"][i], arrays["force_energy"][i] = forces.scalars, forces.potential_energy(q)
-        residual[i] = K.largest_residual(placements, frames_a, frames_b, q, drive.values(time), actuator_q)
+        residual[i] = K.largest_residual(placements, frames_a, frames_b, closure_rows, q, drive.values(time), actuator_q)
         site_outputs[i] = compiled.site_outputs_buffer
         poses[i] = placements[site_frames]
         _end_effector(model, data, frame, q, v, rate[nq : nq + nv], arrays, i)

@@ -174,7 +174,7 @@ def worker(scene: str, out_dir: str, imports: float) -> dict:
     """
     phases: dict[str, float] = {"imports": imports}
     clock = time.process_time
-    from robot.cli.outputs import save_or_fallback
+    from robot.io.results import save_result  # what the command's save_or_fallback calls
     from robot.run import build_run, compile_kernels
     import robot.run as run_module
 
@@ -192,7 +192,7 @@ def worker(scene: str, out_dir: str, imports: float) -> dict:
     timers.restore()
     phases["integrate"], phases["outputs"] = timers.spent["integrate"], timers.spent["outputs"]
     start = clock()
-    path, _ = save_or_fallback(result, Path(out_dir) / f"{run.scene.file_stem}.npz", run.scene.output)
+    path = save_result(result, Path(out_dir) / f"{run.scene.file_stem}.npz", run.scene.output)
     phases["write"] = clock() - start
     file_bytes = path.stat().st_size
 
