@@ -79,6 +79,9 @@ Schema (defaults in brackets)::
     positions = { crank_rod = -1.4 }     # 1-DOF tree joints: coordinate at t = 0 (rad or m); held
                                          # when independent, else a guess (robot.model.initial_state)
     velocities = { crank_rod = 0.0 }     # their rates at t = 0 (rad/s or m/s), projected onto the constraints
+    clearance_state = "centred"          # clearance joints at t = 0: "centred" (elements concentric) or
+                                         # "resting" (in contact under the ideal joint's load, at the static
+                                         # penetration: robot.model.resting_state)
 
     [output]   step [2e-4] (0: every step), keep [all arrays], precision ["float32"] (or "float64"):
                see :class:`OutputSpec`
@@ -199,6 +202,7 @@ class Scene:
     gravity: tuple[float, float, float] = (0.0, 0.0, -9.81)
     initial_positions: dict[str, float] = field(default_factory=dict)
     initial_velocities: dict[str, float] = field(default_factory=dict)
+    clearance_state: str = "centred"  # [initial] clearance_state: robot.model.initial_state.CLEARANCE_STATES
     output: OutputSpec = field(default_factory=OutputSpec)
     forces: tuple = field(default_factory=tuple)  # robot.scene.forces.ForceSpec per [[force]] table
     actuators: dict = field(default_factory=dict)  # joint -> robot.scene.forces.ActuatorSpec
@@ -472,7 +476,7 @@ def _output(table: dict, clearance_joints: list[str], where: str) -> OutputSpec:
 def _misalignment(initial: dict, clearances: tuple[ClearanceSpec, ...], where: str) -> dict[str, float]:
     """``[initial] misalignment_deg``, each checked against the joint's clearances (:func:`admissible_misalignment`)."""
     w = f"{where} [initial]"
-    _unknown(initial, {"misalignment_deg", "positions", "velocities"}, w)
+    _unknown(initial, {"misalignment_deg", "positions", "velocities", "clearance_state"}, w)
     misalignment = initial.get("misalignment_deg", {})
     if not isinstance(misalignment, dict):
         raise SceneError(f"{w}: misalignment_deg={misalignment!r} must be a table {{JOINT = degrees}}")
@@ -653,7 +657,22 @@ def scene_from_document(data: dict[str, Any], path: Path, base_dir: Path) -> Sce
         gravity=_gravity(data, where),
         initial_positions=_joint_values(initial, "positions", f"{where} [initial]"),
         initial_velocities=_joint_values(initial, "velocities", f"{where} [initial]"),
+        clearance_state=_clearance_state(initial, f"{where} [initial]"),
     )
+
+
+def _clearance_state(table: dict, where: str) -> str:
+    """``[initial] clearance_state``: one of :data:`robot.model.initial_state.CLEARANCE_STATES`."""
+    from robot.model.initial_state import CLEARANCE_STATES
+
+    value = table.get("clearance_state", "centred")
+    if value not in CLEARANCE_STATES:
+        raise SceneError(
+            f"{where}: clearance_state={value!r} must be one of {', '.join(repr(v) for v in CLEARANCE_STATES)}",
+            key="initial.clearance_state",
+            value=value,
+        )
+    return value
 
 
 def _gravity(data: dict, where: str) -> tuple[float, float, float]:
