@@ -74,15 +74,30 @@ def run_file(out: Path, scene: str, overrides: dict[str, Any], t_end: float) -> 
     return out / "runs" / f"{scene}_{key}.npz"
 
 
-def _simulate(job: tuple[str, dict[str, Any], float, str]) -> str:
-    """Run one scene and save it (top level: runs in a worker process); an existing file is kept."""
+def _simulate(job: tuple[str, dict[str, Any], float, str]) -> tuple[str, str | None]:
+    """Run one scene and save it (top level: runs in a worker process); an existing file is kept.
+
+    Returns the path and, if the run could not start (the library's own error), its message."""
+    from robot.errors import Error
     from robot.io.results import save_result
     from robot.run import simulate
 
     scene, overrides, t_end, path = job
     if not Path(path).exists():
-        save_result(simulate(scene, overrides, t_end=t_end), path)
-    return path
+        try:
+            save_result(simulate(scene, overrides, t_end=t_end), path)
+        except Error as exc:
+            return path, f"{type(exc).__name__}: {exc}"
+    return path, None
+
+
+def _outcomes(todo: list, workers: int):
+    """(path, error) of each job as it finishes (in order), in worker processes when workers > 1."""
+    if workers > 1 and len(todo) > 1:
+        with ProcessPoolExecutor(max_workers=workers) as pool:
+            yield from pool.map(_simulate, todo)
+    else:
+        yield from map(_simulate, todo)
 
 
 def run_study(sets: Sequence[ParameterSet], out: Path, workers: int = 1, log: Callable[[str], None] = print) -> list[dict]:
@@ -97,16 +112,19 @@ def run_study(sets: Sequence[ParameterSet], out: Path, workers: int = 1, log: Ca
             jobs[str(run_file(out, scene, parameters.overrides, parameters.t_end))] = (scene, parameters.overrides, parameters.t_end)
     todo = [(*job, path) for path, job in jobs.items() if not Path(path).exists()]
     log(f"{len(sets)} parameter sets, {len(jobs)} runs, {len(todo)} to simulate")
-    if workers > 1 and len(todo) > 1:
-        with ProcessPoolExecutor(max_workers=workers) as pool:
-            for path in pool.map(_simulate, todo):
-                log(f"done {Path(path).name}")
-    else:
-        for job in todo:
-            log(f"done {Path(_simulate(job)).name}")
+    errors = {}
+    for path, error in _outcomes(todo, workers):
+        log(f"{'FAILED' if error else 'done'} {Path(path).name}{': ' + error if error else ''}")
+        if error:
+            errors[path] = error
     entries = []
     for parameters in sets:
-        results = {scene: load_result(run_file(out, scene, parameters.overrides if scene != IDEAL else {}, parameters.t_end)) for scene in (IDEAL, *CLEARANCE_SCENES)}
+        paths = {scene: run_file(out, scene, parameters.overrides if scene != IDEAL else {}, parameters.t_end) for scene in (IDEAL, *CLEARANCE_SCENES)}
+        not_started = {scene: errors[str(path)] for scene, path in paths.items() if str(path) in errors}
+        if not_started:
+            entries.append({"label": parameters.label, "overrides": parameters.overrides, "t_end": parameters.t_end, "failed_runs": not_started, "claims": []})
+            continue
+        results = {scene: load_result(path) for scene, path in paths.items()}
         failed = {scene: r.message for scene, r in results.items() if not r.success}
         claims = claims_json(evaluate_claims(results, _period(parameters)))
         entries.append({"label": parameters.label, "overrides": parameters.overrides, "t_end": parameters.t_end, "failed_runs": failed, "claims": claims})

@@ -57,6 +57,12 @@ MAX_ITERATIONS = 200
 NEGLIGIBLE_LOAD = 1e-9
 #: finite-difference increment of the tilt (rad): ~1e-3 of a 0.1 mm clearance over a 0.1 m bearing
 TILT_INCREMENT = 1e-6
+#: continuation in the ideal joint's moment (fractions applied in turn)
+MOMENT_STEPS = (0.25, 0.5, 0.75, 1.0)
+#: a translation (tilt) whose stiffness is below this fraction of the stiffest one is free: the gap is open
+STIFF_FRACTION = 1e-5
+#: the moment residual is measured against |F| times this lever (m)
+MOMENT_ARM = 0.01
 
 
 @dataclass(frozen=True)
@@ -114,38 +120,81 @@ def resting_pose(law, kind: str, outer: pin.SE3, inner: pin.SE3, load: np.ndarra
     ``outer``/``inner``: the element frames' placements in the centred state;
     ``kind``: the ideal joint (``"spherical"``: 3 force equations;
     ``"revolute"``: also the 2 moments normal to the axis when ``tilt_free``).
+    The force is balanced first with the journal untilted, then the moment is
+    applied in steps (continuation: a tilting journal switches its contacts
+    between the rings' edges and the flanges, and each step starts close).
     """
-    twist, onset = np.zeros(6), np.zeros(law.n_candidates)
-    n_tilt = 2 if kind == "revolute" and tilt_free else 0
-    inner_axes = inner.rotation
-    rows = [0, 1, 2]
     target = np.asarray(load, dtype=float)
     magnitude = float(np.linalg.norm(target[:3]))
     if magnitude < NEGLIGIBLE_LOAD:
-        return RestingPose(np.zeros(3), np.zeros(2), law.penetration(outer.rotation, outer.translation, inner.rotation, inner.translation), target, 0)
-
-    def residual(x: np.ndarray) -> np.ndarray:
-        rotation = inner.rotation @ _tilt_rotation(x[3:])
-        contact = law.evaluate(outer.rotation, outer.translation, twist, rotation, inner.translation + x[:3], twist, onset)
-        force = contact.wrench_inner[:3] - target[:3]
-        if not n_tilt:
-            return force
-        moment = contact.wrench_inner[3:] - target[3:]
-        return np.concatenate([force, [moment @ inner_axes[:, 0], moment @ inner_axes[:, 1]]])
-
-    x = np.zeros(3 + n_tilt)
+        return RestingPose(np.zeros(3), np.zeros(2), _penetration(law, outer, inner, np.zeros(3)), target, 0)
     gap_step = 0.25 * float(np.min(law.candidate_clearances()))
-    scale = np.concatenate([np.full(3, magnitude), np.full(n_tilt, magnitude * gap_step * 1e2)])
-    for iteration in range(MAX_ITERATIONS):
-        r = residual(x)
-        if np.max(np.abs(r[:3])) <= TOLERANCE * magnitude and (not n_tilt or np.max(np.abs(r[3:])) <= TOLERANCE * scale[3]):
-            d_world = x[:3]
-            return RestingPose(outer.rotation.T @ d_world, np.pad(x[3:], (0, 2 - n_tilt)), _penetration(law, outer, inner, x), target, iteration)
-        x = x + _step(residual, x, r, gap_step)
+    x, iterations = _damped_newton(law, outer, inner, target, 0.0, np.zeros(3), gap_step)
+    if kind == "revolute" and tilt_free:
+        x = np.concatenate([x, np.zeros(2)])
+        for fraction in MOMENT_STEPS:
+            x, used = _damped_newton(law, outer, inner, target, fraction, x, gap_step)
+            iterations += used
+    return RestingPose(outer.rotation.T @ x[:3], np.pad(x[3:], (0, 5 - x.size)), _penetration(law, outer, inner, x), target, iterations)
+
+
+def _residual(law, outer: pin.SE3, inner: pin.SE3, target: np.ndarray, moment_fraction: float, x: np.ndarray) -> np.ndarray:
+    """Contact wrench on the inner element minus the load: 3 forces (+ 2 moments normal to the axis when x has a tilt)."""
+    twist = np.zeros(6)
+    rotation = inner.rotation @ _tilt_rotation(x[3:])
+    contact = law.evaluate(outer.rotation, outer.translation, twist, rotation, inner.translation + x[:3], twist, np.zeros(law.n_candidates))
+    force = contact.wrench_inner[:3] - target[:3]
+    if x.size == 3:
+        return force
+    moment = contact.wrench_inner[3:] - moment_fraction * target[3:]
+    return np.concatenate([force, inner.rotation[:, :2].T @ moment])
+
+
+def _damped_newton(law, outer, inner, target, moment_fraction, x, gap_step) -> tuple[np.ndarray, int]:
+    """Newton's method from ``x``: full steps first (fast where the contact set settles at once);
+    if that stalls, again from ``x`` with backtracking on the scaled residual. InitialStateError if both stall."""
+    value = float("nan")
+    for backtracking in (False, True):
+        try:
+            return _newton(law, outer, inner, target, moment_fraction, x, gap_step, backtracking)
+        except _Stalled as stalled:
+            value = stalled.value
     raise InitialStateError(
         f"[initial] clearance_state = 'resting': no resting pose found for a load {np.round(target, 3).tolist()} "
-        f"(residual {np.round(residual(x), 6).tolist()} after {MAX_ITERATIONS} iterations)"
+        f"(scaled residual {value:.3e} at moment fraction {moment_fraction:g}); use clearance_state = 'centred'"
     )
+
+
+class _Stalled(Exception):
+    def __init__(self, value: float):
+        self.value = value
+
+
+def _newton(law, outer, inner, target, moment_fraction, x, gap_step, backtracking: bool) -> tuple[np.ndarray, int]:
+    magnitude = float(np.linalg.norm(target[:3]))
+    scale = np.concatenate([np.full(3, magnitude), np.full(x.size - 3, magnitude * MOMENT_ARM)])
+
+    def residual(point: np.ndarray) -> np.ndarray:
+        return _residual(law, outer, inner, target, moment_fraction, point)
+
+    r = residual(x)
+    value = float(np.linalg.norm(r / scale))
+    for iteration in range(MAX_ITERATIONS):
+        if value <= TOLERANCE:
+            return x, iteration
+        depth = float(np.max(_penetration(law, outer, inner, x), initial=0.0))
+        step, closing = _step(residual, x, r, gap_step, depth)
+        for _ in range(40 if backtracking else 1):
+            trial_r = residual(x + step)
+            trial = float(np.linalg.norm(trial_r / scale))
+            # crossing the gap the residual stays at the load (no contact yet): not worse is progress there
+            if not backtracking or trial < value or (closing and trial <= value):
+                break
+            step = 0.5 * step
+        else:
+            raise _Stalled(value)
+        x, r, value = x + step, trial_r, trial
+    raise _Stalled(value)
 
 
 def _penetration(law, outer: pin.SE3, inner: pin.SE3, x: np.ndarray) -> np.ndarray:
@@ -153,32 +202,48 @@ def _penetration(law, outer: pin.SE3, inner: pin.SE3, x: np.ndarray) -> np.ndarr
     return law.penetration(outer.rotation, outer.translation, rotation, inner.translation + x[:3])
 
 
-def _step(residual, x: np.ndarray, r: np.ndarray, gap_step: float) -> np.ndarray:
-    """Newton step where the contact is stiff, a gap-closing step along the force residual elsewhere."""
+def _step(residual, x: np.ndarray, r: np.ndarray, gap_step: float, depth: float = 0.0) -> tuple[np.ndarray, bool]:
+    """Newton step in the stiff translations and the tilts, a gap-closing step along the force
+    residual in the free translations (and whether there was one).
+
+    The translational stiffness ``K = -sym(dF/dd)`` of a conservative contact at rest is positive
+    semi-definite: its eigenvectors with (relatively) zero eigenvalue are the directions in which
+    no candidate touches yet; finite-difference noise is far below STIFF_FRACTION of the largest.
+    ``depth``: the deepest penetration at x (m); the increments stay well inside it, so the
+    differences do not straddle the onset of the contact they measure.
+    """
     n = x.size
-    increments = np.concatenate([np.full(3, 1e-3 * gap_step), np.full(n - 3, TILT_INCREMENT)])
+    translation = 1e-3 * gap_step if depth <= 0.0 else min(1e-3 * gap_step, 1e-2 * depth)
+    tilt = TILT_INCREMENT if depth <= 0.0 else min(TILT_INCREMENT, 1e-2 * depth / gap_step)
+    increments = np.concatenate([np.full(3, translation), np.full(n - 3, tilt)])
     jacobian = np.empty((n, n))
     for k in range(n):
         h = np.zeros(n)
         h[k] = increments[k]
         jacobian[:, k] = (residual(x + h) - residual(x - h)) / (2.0 * increments[k])
-    norms = np.linalg.norm(jacobian, axis=0)
-    stiff = norms > 1e-12 * max(float(np.max(norms)), 1e-300)
+    stiffness = -0.5 * (jacobian[:3, :3] + jacobian[:3, :3].T)
+    eigenvalues, vectors = np.linalg.eigh(stiffness)
+    stiff = eigenvalues > STIFF_FRACTION * max(float(eigenvalues[-1]), 0.0)
+    basis = np.hstack([jacobian[:, :3] @ vectors[:, stiff], jacobian[:, 3:]])
     step = np.zeros(n)
-    if np.any(stiff):
-        scaled = jacobian[:, stiff] / norms[stiff]
-        solution, *_ = np.linalg.lstsq(scaled, -r, rcond=1e-12)
-        step[stiff] = solution / norms[stiff]
-    # translations without stiffness: move along the force residual (the contact force on the inner element
+    if basis.shape[1] and np.any(basis):
+        norms = np.linalg.norm(basis, axis=0)
+        norms[norms == 0.0] = 1.0
+        solution, *_ = np.linalg.lstsq(basis / norms, -r, rcond=1e-12)
+        solution /= norms
+        n_stiff = int(np.sum(stiff))
+        step[:3] = vectors[:, stiff] @ solution[:n_stiff]
+        step[3:] = solution[n_stiff:]
+    # free translations: move along the force residual (the contact force on the inner element
     # opposes its displacement, so the load it must carry, -r, is reached by moving along r)
-    free = ~stiff[:3]
-    if np.any(free):
-        direction = np.where(free, r[:3], 0.0)
-        length = float(np.linalg.norm(direction))
-        if length > 0.0:
-            step[:3] += gap_step * direction / length
+    free = vectors[:, ~stiff]
+    direction = free @ (free.T @ r[:3])
+    length = float(np.linalg.norm(direction))
+    closing = length > 1e-12 * max(float(np.linalg.norm(r[:3])), 1e-300)
+    if closing:
+        step[:3] += gap_step * direction / length
     limit = 4.0 * gap_step
     norm = float(np.linalg.norm(step[:3]))
     if norm > limit:
         step *= limit / norm
-    return step
+    return step, closing
