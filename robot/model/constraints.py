@@ -306,6 +306,25 @@ class ConstraintKernel:
         return out
 
 
+def reaction_on_b(data: pin.Data, rows: ClosureRows, multipliers: np.ndarray) -> np.ndarray:
+    """The wrench ``[F, M]`` (world axes, moment about frame b's origin) the closure's rows exert on frame b.
+
+    With ``M qdd + Phi_q^T lambda = Q`` the constraint force is ``-Phi_q^T lambda``;
+    frame b enters the rows as ``-p_b`` and through ``x_b``, ``y_b`` in
+    ``z_a . x_b``, ``z_a . y_b`` (d/dt = ``-w_b . (z_a x x_b)`` + terms of a), so on b:
+    ``F = lambda_t``, ``M = lambda_x (z_a x x_b) + lambda_y (z_a x y_b)``.
+    ``multipliers``: the full multiplier vector of the set. Requires frame placements.
+    """
+    r = rows.row
+    force = np.array(multipliers[r : r + 3], dtype=float)
+    moment = np.zeros(3)
+    if rows.closure.kind == "revolute":
+        z_a = data.oMf[rows.closure.frame_a].rotation[:, 2]
+        rotation_b = _frame_b_rotation(data, rows)
+        moment = multipliers[r + 3] * np.cross(z_a, rotation_b[:, 0]) + multipliers[r + 4] * np.cross(z_a, rotation_b[:, 1])
+    return np.concatenate([force, moment])
+
+
 def _offset_a(data: pin.Data, rows: ClosureRows) -> np.ndarray | None:
     """``R_a d`` (world axes) of a closure with a translation offset, else None."""
     if rows.translation_offset_a is None:

@@ -27,16 +27,20 @@ mechanism in the clearance model's coordinates) the multipliers of
 ``M qdd + Phi_q^T lambda = -h`` (paper eq. (24), ``qdd`` from the acceleration
 analysis) give, for a centring closure with rows ``p_a - p_b`` and
 ``z_a . x_b``, ``z_a . y_b`` (a: outer, b: inner), the wrench on the inner
-element ``F = lambda_t``, ``M = lambda_x (z_a x x_b) + lambda_y (z_a x y_b)``
-about its origin (the generalized force ``-Phi_q^T lambda`` restricted to
-frame b's twist). ``tests/test_resting_state.py`` checks it against the
+element (:func:`robot.model.constraints.reaction_on_b`: the generalized force
+``-Phi_q^T lambda`` restricted to frame b's twist). ``tests/test_resting_state.py`` checks it against the
 contact law: the simulation starting there stays at the static penetration.
 
-**The solve.** Newton's method on the residual with a finite-difference
-Jacobian (columns scaled to unit norm); directions in which no candidate is in
-contact yet (zero stiffness) are stepped along the residual's force, up to a
-fraction of the smallest clearance per iteration, so the element crosses the
-gap and lands in contact; then Newton converges quadratically.
+**The solve.** First the force with the journal untilted, then the moment by
+continuation (``MOMENT_STEPS``). Each is Newton's method on the residual with a
+finite-difference Jacobian (increments well inside the current penetration).
+The translations are split by the eigenvectors of the symmetric contact
+stiffness ``-sym(dF/dd)`` (positive semi-definite for a conservative contact at
+rest): in the stiff ones Newton steps, in the free ones (no candidate touching
+in that direction yet) the element moves along the force residual by a
+quarter of the smallest clearance per iteration, so it crosses the gap and
+lands in contact. If full steps stall (a contact switching on and off), the
+iteration restarts with backtracking on the scaled residual.
 """
 
 from __future__ import annotations
@@ -95,19 +99,7 @@ def ideal_reactions(centred: C.ConstraintSet, q: np.ndarray, v: np.ndarray, driv
             "are not unique; use clearance_state = 'centred'"
         )
     names = set(mechanism.clearance_names)
-    out = {}
-    for rows in centred.closures:
-        if rows.closure.name not in names:
-            continue
-        r = rows.row
-        force = multipliers[r : r + 3]
-        moment = np.zeros(3)
-        if rows.closure.kind == "revolute":
-            z_a = data.oMf[rows.closure.frame_a].rotation[:, 2]
-            rotation_b = C._frame_b_rotation(data, rows)
-            moment = multipliers[r + 3] * np.cross(z_a, rotation_b[:, 0]) + multipliers[r + 4] * np.cross(z_a, rotation_b[:, 1])
-        out[rows.closure.name] = np.concatenate([force, moment])
-    return out
+    return {rows.closure.name: C.reaction_on_b(data, rows, multipliers) for rows in centred.closures if rows.closure.name in names}
 
 
 def _tilt_rotation(tilt: np.ndarray) -> np.ndarray:
