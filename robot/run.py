@@ -95,7 +95,10 @@ def build_run(scene: Scene | str | Path, **overrides) -> Run:
     else:
         q_guess = pin.neutral(mechanism.model)
     misalignment = {joint: misalignment_rotation(angle) for joint, angle in scene.misalignment_deg.items()}
-    y0 = initial_state(mechanism, q_guess, drive.drive(0.0), misalignment, scene.initial_positions, scene.initial_velocities)
+    y0 = initial_state(
+        mechanism, q_guess, drive.drive(0.0), misalignment, scene.initial_positions, scene.initial_velocities,
+        scene.clearance_state, {c.joint: c.law for c in scene.clearances},
+    )
     return Run(scene, mechanism, dynamics, y0, layout)
 
 

@@ -100,7 +100,62 @@ def scene_runs(tmp_path_factory):
         if name not in runs:
             with warnings.catch_warnings():
                 warnings.simplefilter("ignore", RedundantConstraintWarning)
-                runs[name] = build_run(str(closure_scene(tmp_path_factory.mktemp(name), name)) if name in CLOSURE_SCENES else name)
+                if name in CLOSURE_SCENES:
+                    runs[name] = build_run(str(closure_scene(tmp_path_factory.mktemp(name), name)))
+                else:  # the 4-UPS/RPS scenes as the checks were calibrated (CALIBRATED_COMPOUND)
+                    runs[name] = build_run(calibrated_scene(name) if name.startswith("compound") else name)
         return runs[name]
 
     return get
+#: The compound scenes' R1 geometry and start that the integrator, stability and validation tests were
+#: calibrated on (impacts from a centred start, the 40 mm bearing). Issue 18 changed the shipped defaults
+#: (docs/parameters.md); those tests test the integrators and the formulations, not the defaults.
+CALIBRATED_COMPOUND = {"clearance.R1.bearing_length": 0.04, "clearance.R1.bearing_outer_radius": 0.035, "initial.clearance_state": "centred"}
+
+
+def calibrated_scene(name: str, **changes):
+    """The shipped scene ``name`` with :data:`CALIBRATED_COMPOUND` (and ``changes``, e.g. ``duration``)."""
+    from robot.scene.loader import load_scene
+
+    return load_scene(name).with_changes({**CALIBRATED_COMPOUND, **changes})
+
+
+_CALIBRATED_CLEARANCES = """
+[initial]
+clearance_state = "centred"
+
+[[clearance]]
+joint = "S1"
+type = "spherical"
+outer_on = "child"
+material = "steel"
+ball_radius = 0.015
+clearance = 1.0e-4
+restitution = 0.9
+exponent = 1.5
+dissipation = "lankarani_nikravesh"
+friction = { law = "brown_mcphee", static = 0.07, dynamic = 0.05, transition_velocity = 5.0e-3 }
+
+[[clearance]]
+joint = "R1"
+type = "revolute"
+outer_on = "child"
+material = "steel"
+journal_radius = 0.02
+radial_clearance = 1.0e-4
+bearing_outer_radius = 0.035
+bearing_length = 0.04
+axial_clearance = 1.0e-4
+restitution = 0.9
+dissipation = "lankarani_nikravesh"
+radial_law = "linear"
+friction = { law = "brown_mcphee", static = 0.07, dynamic = 0.05, transition_velocity = 5.0e-3 }
+"""
+
+
+def calibrated_scene_file(folder: Path, name: str, extra: str = "") -> Path:
+    """A scene file extending the shipped ``name`` with :data:`CALIBRATED_COMPOUND` (for functions that take
+    scene files); ``extra``: more top-level TOML before the tables (e.g. a [solver] table goes after)."""
+    path = folder / f"{name}_calibrated.toml"
+    path.write_text(f'extends = "{name}"\nname = "{name}_calibrated"\n{extra}\n{_CALIBRATED_CLEARANCES}', encoding="utf-8")
+    return path

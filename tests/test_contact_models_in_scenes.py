@@ -17,6 +17,8 @@ ELASTIC = """
 extends = "compound_misaligned"
 name = "compound_misaligned_elastic"
 duration = {duration}
+[initial]
+clearance_state = "centred"   # closed R1 impact episodes (a resting start stays in contact)
 [solver]
 method = "DOP853"
 rtol = 1e-11

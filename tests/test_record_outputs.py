@@ -19,10 +19,11 @@ from robot.integration.simulation import RECORD_ONSET, RECORD_OUTPUT, integrate
 from robot.io import record_outputs as RO
 from robot.io.results import make_result, select_records
 from robot.run import build_run
+from tests.conftest import CALIBRATED_COMPOUND
 from robot.scene.loader import OutputSpec
 
 CASES = {
-    "compound_misaligned": ("compound_misaligned", {}, 0.04),
+    "compound_misaligned": ("compound_misaligned", CALIBRATED_COMPOUND, 0.04),
     "revolute": ("revolute", {}, 0.04),
     "spherical": ("spherical", {}, 0.04),
     "ideal": ("ideal", {}, 0.01),
@@ -35,7 +36,7 @@ CASES = {
     # parameters away from the shipped ones: larger clearances, softer restitution, another ball
     "other parameters": (
         "compound",
-        {"clearance.R1.radial_clearance": 2.5e-4, "clearance.S1.clearance": 3e-4, "clearance.S1.ball_radius": 0.011, "clearance.R1.restitution": 0.5},
+        {**CALIBRATED_COMPOUND, "clearance.R1.radial_clearance": 2.5e-4, "clearance.S1.clearance": 3e-4, "clearance.S1.ball_radius": 0.011, "clearance.R1.restitution": 0.5},
         0.04,
     ),
 }
@@ -75,7 +76,7 @@ def test_compiled_outputs_equal_the_reference_evaluation(case):
 
 
 def test_outputs_at_the_kept_records_are_the_kept_rows_of_all_outputs():
-    run, trajectory, _ = _records("compound_misaligned", {}, 0.03)
+    run, trajectory, _ = _records("compound_misaligned", CALIBRATED_COMPOUND, 0.03)
     output = OutputSpec(step=1e-3, precision="float64")
     assert np.any(trajectory.kind == RECORD_OUTPUT)  # the scene records its output grid
     full = make_result("x", run.dynamics, trajectory, {})

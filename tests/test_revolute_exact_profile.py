@@ -90,7 +90,8 @@ def pose_at_depth(joint, tilt_fraction: float, skew: float, depth: float):
     def at(offset: float) -> float:
         return deepest_radial(joint, *journal_pose(tilt, offset_direction + skew, offset, offset_direction)) - depth
 
-    offset = 0.0 if tilt_fraction == 1.0 else brentq(at, 0.0, joint.radial_clearance + 2 * depth, xtol=1e-17, rtol=1e-15)
+    offset = 0.0 if tilt_fraction >= 1.0 - 1e-12 else brentq(  # at the maximum tilt the axis passes the centre
+        at, 0.0, joint.radial_clearance + 2 * depth, xtol=1e-17, rtol=1e-15)
     return journal_pose(tilt, offset_direction + skew, offset, offset_direction)
 
 

@@ -19,6 +19,7 @@ from robot.run import build_run
 from robot.integration.simulation import FAILED, FailureLimits, SolverOptions, integrate
 from robot.analysis.studies import stability
 from robot.analysis.studies.common import simulate
+from tests.conftest import calibrated_scene, calibrated_scene_file
 
 # blown-up trial states make numpy and scipy warn on their way to the reported failure
 pytestmark = pytest.mark.filterwarnings("ignore::RuntimeWarning")
@@ -26,7 +27,7 @@ pytestmark = pytest.mark.filterwarnings("ignore::RuntimeWarning")
 
 @pytest.fixture(scope="module")
 def misaligned():
-    return build_run("compound_misaligned")
+    return build_run(calibrated_scene("compound_misaligned"))
 
 
 @pytest.fixture(scope="module")
@@ -139,7 +140,7 @@ def test_hidden_contact_guard_in_a_run(misaligned):
 def test_study_maps_record_causes(misaligned, tmp_path):
     """The stability studies run through and label every run (tiny grids)."""
     stiff = stability.stiffness_map(
-        "compound_misaligned", scales=(1.0,), steps=(1e-3, 1e-5), methods=("RK4",), t_end=0.006, folder=tmp_path
+        str(calibrated_scene_file(tmp_path, "compound_misaligned")), scales=(1.0,), steps=(1e-3, 1e-5), methods=("RK4",), t_end=0.006, folder=tmp_path
     )
     results = {row["h"]: row["result"] for row in stiff["methods"]["RK4"]}
     assert results[1e-5] == stability.OK

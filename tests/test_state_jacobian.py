@@ -27,13 +27,14 @@ from robot.run import build_run
 from robot.scene.loader import load_scene
 from robot.integration.simulation import SolverOptions, integrate
 from robot.analysis.studies.speed import sample_states
+from tests.conftest import calibrated_scene
 
 from conftest import assert_passes_as_plain_python
 
 
 @pytest.fixture(scope="module")
 def misaligned():
-    return build_run("compound_misaligned")
+    return build_run(calibrated_scene("compound_misaligned"))
 
 
 @pytest.fixture(scope="module")

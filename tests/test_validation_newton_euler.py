@@ -21,6 +21,7 @@ from robot.validation import study
 from robot.validation.absolute_constraints import skew
 from robot.validation.event_loop import integrate_with_events
 from robot.validation.settings import VALIDATION_SOLVER, validation_run, validation_solver
+from tests.conftest import calibrated_scene, calibrated_scene_file
 
 #: the comparison thresholds before the first impact (calibrated to VALIDATION_SOLVER)
 ONSET_TOL_S = 1e-8
@@ -45,7 +46,7 @@ def _moved(model: NE.NewtonEulerModel, y: np.ndarray, dr: np.ndarray, dpi: np.nd
 
 @pytest.fixture(scope="module")
 def compound_model():
-    run = build_run("compound", duration=0.01)
+    run = build_run(calibrated_scene("compound", duration=0.01))
     model = NE.build_model(run)
     return run, model, NE.initial_state(model, run)
 
@@ -127,7 +128,7 @@ def test_range_space_solution_equals_the_augmented_system(compound_model):
 
 
 def _series_pair(scene: str, duration: float):
-    run = validation_run(scene, duration=duration)
+    run = validation_run(calibrated_scene(scene, duration=duration) if scene.startswith("compound") else load_scene(scene).with_changes({"duration": duration}))
     assert run.scene.solver == VALIDATION_SOLVER
     lagrange = run_scene(run)
     assert lagrange.success, lagrange.message
@@ -166,7 +167,7 @@ def test_compound_clearance_agrees_before_and_at_the_first_impact():
 
 
 LSODA_SCENE = """
-extends = "compound"
+extends = "compound_calibrated.toml"
 name = "compound_lsoda"
 [solver]
 method = "LSODA"
@@ -179,6 +180,7 @@ max_step = 5e-3
 @pytest.fixture
 def lsoda_scene(tmp_path):
     """A scene whose [solver] asks for LSODA (a method the Newton-Euler event loop does not offer)."""
+    calibrated_scene_file(tmp_path, "compound")
     path = tmp_path / "compound_lsoda.toml"
     path.write_text(LSODA_SCENE, encoding="utf-8")
     return path

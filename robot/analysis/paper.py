@@ -7,14 +7,24 @@ periods by default) and writes figures corresponding to the paper's
   the revolute joint (top and bottom ring), aligned and misaligned;
 * Figure 8: contact forces (spherical, revolute) and driving forces (aligned,
   misaligned);
-* Figure 9: end-effector displacement, velocity and acceleration (x and y),
-  ideal against clearance;
+* Figure 9: end-effector displacement, velocity and acceleration (the paper's
+  X and Y), ideal against clearance;
+* Figure 10: end-effector X and Y displacement of the aligned clearance case,
+  Newton-Euler (:mod:`robot.validation.newton_euler`, absolute coordinates)
+  against Lagrange multipliers (:mod:`robot.run`), over its own horizon
+  (``figure10_t_end``: the Newton-Euler engine costs ~1 min of CPU per 0.5 s);
 
 and ``summary.json``: peak contact force per joint, peak driving forces, the
 duration of the initial transient, the RMS deviation of the end-effector
 acceleration from the ideal case, and the paper's five claims measured with
 their verdicts (``claims``, also written as ``claims.md``:
 :mod:`robot.analysis.claims`).
+
+**Axes.** The paper's figures use its fixed frame: the RPS limb moves in its
+X-Y plane and the R1 axis is its Z ("in the case of initial alignment, the
+spherical joint does not move in the Z direction"). Ours (``robot/model/ups_rps_design.py``):
+world z up, the R1 axis along world y, the limb in the x-z plane. So the
+paper's X, Y, Z are our x, z, -y (:data:`PAPER_AXES`, right-handed).
 
 **Initial transient** (our definition, the paper gives none): the last time at
 which the normal force of a clearance joint exceeds ``TRANSIENT_FACTOR`` times
@@ -37,6 +47,11 @@ from robot.io.results import SimulationResult, load_result, save_result
 
 SCENES = ("ideal", "compound", "compound_misaligned")
 TRANSIENT_FACTOR = 1.5
+#: the paper's fixed-frame axes as (name, world column, sign): X = x, Y = z (up), Z = -y (the R1 axis)
+PAPER_AXES = (("X", 0, 1.0), ("Y", 2, 1.0), ("Z", 1, -1.0))
+#: figure 10: the scene compared and its default horizon (s)
+FIGURE10_SCENE = "compound"
+FIGURE10_T_END = 0.25
 
 
 def simulate_scene(args: tuple[str, float | None, str]) -> str:
@@ -195,30 +210,97 @@ def figure_8(results: dict[str, SimulationResult], path: Path) -> Path:
 
 
 def figure_9(results: dict[str, SimulationResult], path: Path) -> Path:
-    """End-effector displacement, velocity, acceleration: ideal against clearance (paper Figure 9)."""
+    """End-effector displacement, velocity, acceleration in the paper's X and Y: ideal against clearance (paper Figure 9)."""
     fig, axes = _figure(3, 2, (12, 11))
     quantities = (("ee_position", "displacement (mm)", 1e3), ("ee_velocity", "velocity (mm/s)", 1e3), ("ee_acceleration", "acceleration (m/s^2)", 1.0))
     letters = iter("abcdef")
     for row, (key, unit, scale) in enumerate(quantities):
-        for col, axis in enumerate("xy"):
+        for col, (axis, column, sign) in enumerate(PAPER_AXES[:2]):
             ax = axes[row, col]
             for name, style in (("compound", "-"), ("compound_misaligned", "-"), ("ideal", "k--")):
                 result = results[name]
-                ax.plot(result["t"], result[key][:, col] * scale, style, lw=0.7 if name != "ideal" else 1.0, label=name)
-            ax.set(title=f"({next(letters)}) {axis.upper()}-{key.split('_')[1]}", xlabel="time (s)", ylabel=f"{axis} {unit}")
+                ax.plot(result["t"], sign * result[key][:, column] * scale, style, lw=0.7 if name != "ideal" else 1.0, label=name)
+            ax.set(title=f"({next(letters)}) {axis}-{key.split('_')[1]}", xlabel="time (s)", ylabel=f"{axis} {unit}")
             ax.grid(alpha=0.3)
             ax.legend(fontsize=7)
     return _save(fig, path)
 
 
-def write_outputs(results: dict[str, SimulationResult], out: Path) -> list[Path]:
-    """All figures and ``summary.json``."""
+def figure10_series(t_end: float = FIGURE10_T_END, scene: str = FIGURE10_SCENE) -> dict:
+    """End-effector positions of one scene by the two formulations, on the Lagrange run's records.
+
+    Both integrate the same :class:`robot.run.Run` (same initial state) with the
+    validation solver (:data:`robot.validation.settings.VALIDATION_SOLVER`, an
+    explicit Runge-Kutta: the Newton-Euler event loop takes no other), like for
+    like; the Newton-Euler positions are its dense output at the Lagrange record times. Returns ``t``, ``lagrange`` and ``newton_euler`` (n, 3) world
+    positions, and each run's status and CPU seconds.
+    """
+    import time
+
+    from robot.run import run_scene
+    from robot.validation import newton_euler as NE
+    from robot.validation.settings import validation_run
+
+    run = validation_run(scene, duration=t_end)
+    lagrange = run_scene(run)
+    t = np.asarray(lagrange["t"], dtype=float)
+    started = time.process_time()
+    newton_euler = NE.simulate(run, t_eval=t)
+    ne_cpu = time.process_time() - started
+    ne_t = np.asarray(newton_euler.eval_arrays.get("t", t), dtype=float)
+    ne_position = np.asarray(newton_euler.eval_arrays["ee_position"], dtype=float)
+    n = min(len(ne_t), len(t))
+    return {
+        "scene": scene, "t_end": t_end, "t": t[:n], "lagrange": np.asarray(lagrange["ee_position"], dtype=float)[:n], "newton_euler": ne_position[:n],
+        "lagrange_status": lagrange.message, "newton_euler_status": newton_euler.run.message,
+        "lagrange_cpu_s": float(lagrange.counts["cpu_time"]), "newton_euler_cpu_s": ne_cpu,
+    }
+
+
+def figure10_numbers(series: dict) -> dict:
+    """Largest difference of the two formulations per paper axis (summary.json ``figure10``)."""
+    difference = series["newton_euler"] - series["lagrange"]
+    out = {key: series[key] for key in ("scene", "t_end", "lagrange_status", "newton_euler_status", "lagrange_cpu_s", "newton_euler_cpu_s")}
+    for axis, column, _ in PAPER_AXES:
+        out[f"max_abs_difference_{axis}_m"] = float(np.max(np.abs(difference[:, column]))) if len(difference) else float("nan")
+        out[f"range_{axis}_m"] = float(np.ptp(series["lagrange"][:, column])) if len(difference) else float("nan")
+    return out
+
+
+def figure_10(series: dict, path: Path) -> Path:
+    """End-effector X and Y displacement, Newton-Euler against Lagrange multipliers (paper Figure 10).
+
+    Panel (c), Z, is ours: X and Y of the platform centre follow almost wholly from the five
+    prescribed leg lengths (both formulations meet them to the constraint tolerance), while
+    Z, out of the RPS limb's plane, is the direction the clearances free: it is where the two
+    formulations' dynamics are compared.
+    """
+    fig, axes = _figure(1, 3, (17, 4.5))
+    t = series["t"]
+    for ax, (letter, (axis, column, sign)) in zip(axes[0], zip("abc", PAPER_AXES)):
+        ax.plot(t, sign * series["lagrange"][:, column] * 1e3, lw=1.6, label="Lagrange multipliers")
+        ax.plot(t, sign * series["newton_euler"][:, column] * 1e3, "--", lw=1.0, label="Newton-Euler")
+        ax.set(title=f"({letter}) {axis}-displacement, {series['scene']}", xlabel="time (s)", ylabel=f"{axis} (mm)")
+        twin = ax.twinx()
+        twin.plot(t, sign * (series["newton_euler"][:, column] - series["lagrange"][:, column]) * UM, color="0.5", lw=0.6)
+        twin.set_ylabel("Newton-Euler - Lagrange (um)", color="0.4")
+        ax.grid(alpha=0.3)
+        ax.legend(fontsize=7, loc="upper left")
+    return _save(fig, path)
+
+
+def write_outputs(results: dict[str, SimulationResult], out: Path, figure10: dict | None = None) -> list[Path]:
+    """All figures and ``summary.json``; figure 10 when its ``figure10_series`` is given."""
     written = [
         figure_7(results, out / "figure7_clearance_joints.png"),
         figure_8(results, out / "figure8_forces.png"),
         figure_9(results, out / "figure9_end_effector.png"),
     ]
+    if figure10 is not None:
+        written.append(figure_10(figure10, out / "figure10_newton_euler.png"))
     numbers = summary(results)
+    if figure10 is not None:
+        numbers["figure10"] = figure10_numbers(figure10)
     claims = evaluate_claims(results, numbers["period_s"])
     numbers["claims"] = claims_json(claims)
     written.append(atomic_write_text(out / "claims.md", claims_report(claims)))

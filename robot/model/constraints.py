@@ -14,7 +14,14 @@ construction), so the constraint set holds only
   the initial state (ball centred in its socket, journal axis on the bearing axis,
   with an optional bearing misalignment; for a prismatic site, the ideal prismatic
   joint: slider on the guide axis, ``x_a . (p_a - p_b) = y_a . (p_a - p_b) = 0``, and not
-  rotated, ``z_a . x_b = z_a . y_b = x_a . y_b = 0``; free along the axis).
+  rotated, ``z_a . x_b = z_a . y_b = x_a . y_b = 0``; free along the axis), or
+  their **offset** form that places
+  the inner element at a given pose relative to the outer one (the resting
+  state, :mod:`robot.model.resting_state`): the point ``p_a + R_a d`` of frame a
+  (``d`` in frame a's axes) coincides with the origin of frame b,
+  ``Phi = p_a + R_a d - p_b``; its Jacobian rows use the velocity of that point,
+  ``v_a + w_a x (R_a d)``, and its gamma the classical acceleration
+  ``a_a + alpha_a x r + w_a x (w_a x r)``, ``r = R_a d``.
 
 Velocity and acceleration (paper eq. (24)):
 ``Phi_q qd = -Phi_t`` and ``Phi_q qdd = gamma``, with
@@ -42,11 +49,13 @@ LWA = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
 
 @dataclass(frozen=True)
 class ClosureRows:
-    """A closure with its row offset in Phi, and an optional rotation offset on frame b."""
+    """A closure with its row offset in Phi, an optional rotation offset on frame b and an
+    optional translation offset of frame a's point (frame a's axes, module docstring)."""
 
     closure: Closure
     row: int
     rotation_offset_b: np.ndarray | None = None
+    translation_offset_a: np.ndarray | None = None
 
 
 @dataclass(frozen=True, eq=False)
@@ -94,6 +103,7 @@ def constraint_set(
     driven: bool = True,
     centre_clearance: bool = False,
     misalignment: dict[str, np.ndarray] | None = None,
+    offsets: dict[str, np.ndarray] | None = None,
 ) -> ConstraintSet:
     """The constraints of ``mechanism``.
 
@@ -101,7 +111,9 @@ def constraint_set(
     ideal joint it replaces (used for the initial assembly). ``misalignment``
     maps a revolute site name to a rotation applied to its inner element frame
     in those centring equations, so the assembled bearing axis is the journal axis
-    rotated by it.
+    rotated by it. ``offsets`` maps a site name to the position (outer element
+    frame axes, m) of the inner element's origin relative to the outer one's: the
+    centring equations then place the inner element there (module docstring).
     """
     rows = []
     offset = 0
@@ -109,10 +121,12 @@ def constraint_set(
         rows.append(ClosureRows(closure, offset))
         offset += closure.n_equations
     if centre_clearance:
-        misalignment = misalignment or {}
+        misalignment, offsets = misalignment or {}, offsets or {}
         for site in mechanism.clearance_sites:
             closure = Closure(site.name, site.kind, site.outer_frame, site.inner_frame)
-            rows.append(ClosureRows(closure, offset, misalignment.get(site.name)))
+            translation = offsets.get(site.name)
+            translation = None if translation is None else np.asarray(translation, dtype=float).reshape(3)
+            rows.append(ClosureRows(closure, offset, misalignment.get(site.name), translation))
             offset += closure.n_equations
     return ConstraintSet(mechanism, tuple(rows), driven)
 
@@ -207,7 +221,7 @@ class ConstraintKernel:
         self._datas = pin.StdVec_RigidConstraintData()
         for closure_rows in constraints.closures:
             closure = closure_rows.closure
-            if closure.kind == "spherical":
+            if closure.kind == "spherical" and closure_rows.translation_offset_a is None:
                 fa, fb = model.frames[closure.frame_a], model.frames[closure.frame_b]
                 self._spherical.append(
                     (closure.frame_a, closure.frame_b, data.oMf[closure.frame_a].translation, data.oMf[closure.frame_b].translation)
@@ -307,6 +321,37 @@ def _position_rows(kind: str) -> int:
     return 2 if kind == "prismatic" else 3
 
 
+def reaction_on_b(data: pin.Data, rows: ClosureRows, multipliers: np.ndarray) -> np.ndarray:
+    """The wrench ``[F, M]`` (world axes, moment about frame b's origin) the closure's rows exert on frame b.
+
+    With ``M qdd + Phi_q^T lambda = Q`` the constraint force is ``-Phi_q^T lambda``;
+    frame b enters the rows as ``-p_b`` and through ``x_b``, ``y_b`` in
+    ``z_a . x_b``, ``z_a . y_b`` (d/dt = ``-w_b . (z_a x x_b)`` + terms of a), so on b:
+    ``F = lambda_t``, ``M = lambda_x (z_a x x_b) + lambda_y (z_a x y_b)``.
+    ``multipliers``: the full multiplier vector of the set. Requires frame placements.
+    """
+    r = rows.row
+    force = np.array(multipliers[r : r + 3], dtype=float)
+    moment = np.zeros(3)
+    if rows.closure.kind == "revolute":
+        z_a = data.oMf[rows.closure.frame_a].rotation[:, 2]
+        rotation_b = _frame_b_rotation(data, rows)
+        moment = multipliers[r + 3] * np.cross(z_a, rotation_b[:, 0]) + multipliers[r + 4] * np.cross(z_a, rotation_b[:, 1])
+    return np.concatenate([force, moment])
+
+
+def _offset_a(data: pin.Data, rows: ClosureRows) -> np.ndarray | None:
+    """``R_a d`` (world axes) of a closure with a translation offset, else None."""
+    if rows.translation_offset_a is None:
+        return None
+    return data.oMf[rows.closure.frame_a].rotation @ rows.translation_offset_a
+
+
+def _skew(vector: np.ndarray) -> np.ndarray:
+    x, y, z = vector
+    return np.array([[0.0, -z, y], [z, 0.0, -x], [-y, x, 0.0]])
+
+
 def _closure_residual(model: pin.Model, data: pin.Data, rows: ClosureRows, out: np.ndarray) -> None:
     """Rows of one closure in Phi (reference equations of :func:`residual`)."""
     a, b, r = rows.closure.frame_a, rows.closure.frame_b, rows.row
@@ -317,6 +362,9 @@ def _closure_residual(model: pin.Model, data: pin.Data, rows: ClosureRows, out: 
         out[r : r + 2] = rotation_a[:, :2].T @ gap
     else:
         out[r : r + 3] = gap
+        lever = _offset_a(data, rows)
+        if lever is not None:
+            out[r : r + 3] += lever
     rotation_b = _frame_b_rotation(data, rows)
     for k, (i, j) in enumerate(_ROTATION_PAIRS.get(kind, ()), start=r + _position_rows(kind)):
         out[k] = rotation_a[:, i] @ rotation_b[:, j]
@@ -340,6 +388,9 @@ def _closure_jacobian(model: pin.Model, data: pin.Data, rows: ClosureRows, out: 
             out[r + k] = axis @ (jac_a[:3] - jac_b[:3]) + np.cross(axis, gap) @ jac_a[3:]
     else:
         out[r : r + 3] = jac_a[:3] - jac_b[:3]
+        lever = _offset_a(data, rows)
+        if lever is not None:  # velocity of the point: v_a + w_a x lever = v_a - [lever]x w_a
+            out[r : r + 3] -= _skew(lever) @ jac_a[3:]
     rotation_b = _frame_b_rotation(data, rows)
     relative = jac_a[3:] - jac_b[3:]
     for k, (i, j) in enumerate(_ROTATION_PAIRS.get(kind, ()), start=r + _position_rows(kind)):
@@ -368,6 +419,9 @@ def _closure_gamma(model: pin.Model, data: pin.Data, rows: ClosureRows, out: np.
             out[r + k] = -(axis_ddot @ gap + 2.0 * axis_dot @ gap_dot + axis @ gap_ddot)
     else:
         out[r : r + 3] = -(acc_a.linear - acc_b.linear)
+        lever = _offset_a(data, rows)
+        if lever is not None:  # classical acceleration of the point at zero joint acceleration
+            out[r : r + 3] -= np.cross(acc_a.angular, lever) + np.cross(vel_a.angular, np.cross(vel_a.angular, lever))
     pairs = _ROTATION_PAIRS.get(kind, ())
     if not pairs:
         return

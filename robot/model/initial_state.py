@@ -1,6 +1,11 @@
 """Consistent initial positions and velocities from the kinematic analysis.
 
-**Clearance joints.** The free bodies of clearance joints start **centred**: the
+**Clearance joints** start in one of :data:`CLEARANCE_STATES` (scene key
+``[initial] clearance_state``). ``"resting"``: each inner element in contact
+under the ideal joint's load at t = 0, at the static penetration
+(:mod:`robot.model.resting_state`), the mechanism assembled around it.
+``"centred"`` (the default): the
+free bodies of clearance joints start **centred**: the
 ball centre on the socket centre, the journal axis on the bearing axis with the
 journal midpoint on the bearing midpoint, moving with the velocities the ideal
 joint would give them. An optional misalignment rotates the bearing about its
@@ -32,16 +37,21 @@ trajectory: a given value must agree with it at t = 0.
 from __future__ import annotations
 
 import warnings
+from typing import Mapping
 
 import numpy as np
+import pinocchio as pin
 
+from robot.scene.loader import CLEARANCE_STATES  # the scene schema's choices
 from robot.errors import InitialStateError, InitialStateWarning, UnreachablePoseError
 from robot.model import constraints as C
 from robot.model.kinematics import RANK_TOLERANCE, HeldCoordinates, assemble, update_kinematics, velocity_analysis
 from robot.model.mechanism import Mechanism
+from robot.model.resting_state import ideal_reactions, resting_pose
 
 #: a given coordinate that the assembly moves by more than this (relative, floor 1) is reported
 MOVED_TOLERANCE = 1e-9
+#: the initial states of the clearance joints (module docstring)
 
 
 def initial_state(
@@ -51,10 +61,60 @@ def initial_state(
     misalignment: dict[str, np.ndarray] | None = None,
     positions: dict[str, float] | None = None,
     velocities: dict[str, float] | None = None,
+    clearance_state: str = "centred",
+    laws: Mapping[str, object] | None = None,
 ) -> np.ndarray:
-    """``y0 = [q0, v0]`` consistent with the closures and the drive at the initial time (module docstring)."""
-    s, sd, _ = drive
+    """``y0 = [q0, v0]`` consistent with the closures and the drive at the initial time (module docstring).
+
+    ``clearance_state = "resting"`` needs the contact ``laws`` by site name.
+    """
+    if clearance_state not in CLEARANCE_STATES:
+        raise InitialStateError(f"[initial] clearance_state={clearance_state!r} must be one of {', '.join(CLEARANCE_STATES)}")
     constraints = C.constraint_set(mechanism, driven=True, centre_clearance=True, misalignment=misalignment)
+    y0 = _assembled(constraints, q_guess, drive, positions, velocities)
+    if clearance_state == "centred" or not mechanism.clearance_sites:
+        return y0
+    nq = mechanism.model.nq
+    offsets, rotations = resting_offsets(constraints, y0[:nq], y0[nq:], drive[2], laws or {}, misalignment or {})
+    resting = C.constraint_set(mechanism, driven=True, centre_clearance=True, misalignment=rotations, offsets=offsets)
+    return _assembled(resting, y0[:nq], drive, positions, velocities)
+
+
+def resting_offsets(
+    centred: C.ConstraintSet,
+    q: np.ndarray,
+    v: np.ndarray,
+    drive_acceleration: np.ndarray,
+    laws: Mapping[str, object],
+    misalignment: dict[str, np.ndarray],
+) -> tuple[dict[str, np.ndarray], dict[str, np.ndarray]]:
+    """Per clearance site: the resting translation offset (outer frame axes) and rotation offset of the centring rows."""
+    mechanism = centred.mechanism
+    model = mechanism.model
+    data = model.createData()
+    update_kinematics(model, data, q)
+    loads = ideal_reactions(centred, q, v, drive_acceleration)
+    offsets, rotations = {}, {}
+    for site in mechanism.clearance_sites:
+        if site.name not in laws:
+            raise InitialStateError(f"[initial] clearance_state = 'resting': no contact law for clearance joint {site.name!r}")
+        pose = resting_pose(laws[site.name], site.kind, data.oMf[site.outer_frame], data.oMf[site.inner_frame], loads[site.name], site.name not in misalignment)
+        offsets[site.name] = pose.translation
+        held = misalignment.get(site.name, np.eye(3))
+        rotations[site.name] = pin.exp3(np.array([pose.tilt[0], pose.tilt[1], 0.0])).T @ held
+    return offsets, rotations
+
+
+def _assembled(
+    constraints: C.ConstraintSet,
+    q_guess: np.ndarray,
+    drive: tuple[np.ndarray, np.ndarray, np.ndarray],
+    positions: dict[str, float] | None,
+    velocities: dict[str, float] | None,
+) -> np.ndarray:
+    """``[q0, v0]`` of one constraint set (centring or resting rows) with the given coordinates."""
+    mechanism = constraints.mechanism
+    s, sd, _ = drive
     given_q = given_coordinates(mechanism, positions or {}, "positions", s)
     given_v = given_coordinates(mechanism, velocities or {}, "velocities", sd)
     guess = np.array(q_guess, dtype=float)

@@ -79,6 +79,9 @@ Schema (defaults in brackets)::
     positions = { crank_rod = -1.4 }     # 1-DOF tree joints: coordinate at t = 0 (rad or m); held
                                          # when independent, else a guess (robot.model.initial_state)
     velocities = { crank_rod = 0.0 }     # their rates at t = 0 (rad/s or m/s), projected onto the constraints
+    clearance_state = "centred"          # clearance joints at t = 0: "centred" (elements concentric) or
+                                         # "resting" (in contact under the ideal joint's load, at the static
+                                         # penetration: robot.model.resting_state)
 
     [output]   step [2e-4] (0: every step), keep [all arrays], precision ["float32"] (or "float64"):
                see :class:`OutputSpec`
@@ -122,6 +125,8 @@ from robot.integration.options import STRUCTURED, FailureLimits, SolverOptions
 from robot.integration.solvers import FIXED_STEP_METHODS, METHODS
 
 SCENE_DIR = Path(__file__).resolve().parent / "scenes"
+#: how clearance joints start (``[initial] clearance_state``; robot.model.initial_state builds them)
+CLEARANCE_STATES = ("centred", "resting")
 #: the platform pose coordinates a platform trajectory prescribes (robot.model.trajectory uses them)
 POSE_COORDINATES = ("x", "z", "roll", "pitch", "yaw")
 
@@ -141,7 +146,7 @@ _MATERIAL_KEYS = {"youngs_modulus", "poisson_ratio"}
 _FRICTION_KEYS = {"law", "static", "dynamic", "transition_velocity", "viscous", "reference_force", "coefficient", "regularisation_velocity"}
 _COORDINATE_KEYS = {"offset", "rate", "amplitudes", "harmonics", "phases"}
 _TRAJECTORY_KEYS = {"type", "period", "preset"}  # besides the coordinates' tables
-_INITIAL_KEYS = {"misalignment_deg", "positions", "velocities"}
+_INITIAL_KEYS = {"misalignment_deg", "positions", "velocities", "clearance_state"}
 
 
 @dataclass(frozen=True)
@@ -206,6 +211,7 @@ class Scene:
     gravity: tuple[float, float, float] = (0.0, 0.0, -9.81)
     initial_positions: dict[str, float] = field(default_factory=dict)
     initial_velocities: dict[str, float] = field(default_factory=dict)
+    clearance_state: str = "centred"  # [initial] clearance_state: one of CLEARANCE_STATES
     output: OutputSpec = field(default_factory=OutputSpec)
     forces: tuple = field(default_factory=tuple)  # robot.scene.forces.ForceSpec per [[force]] table
     actuators: dict = field(default_factory=dict)  # joint -> robot.scene.forces.ActuatorSpec
@@ -658,7 +664,21 @@ def scene_from_document(data: dict[str, Any], path: Path, base_dir: Path) -> Sce
         gravity=_gravity(data, where),
         initial_positions=_joint_values(initial, "positions", f"{where} [initial]"),
         initial_velocities=_joint_values(initial, "velocities", f"{where} [initial]"),
+        clearance_state=_clearance_state(initial, f"{where} [initial]"),
     )
+
+
+def _clearance_state(table: dict, where: str) -> str:
+    """``[initial] clearance_state``: one of :data:`CLEARANCE_STATES`."""
+
+    value = table.get("clearance_state", "centred")
+    if value not in CLEARANCE_STATES:
+        raise SceneError(
+            f"{where}: clearance_state={value!r} must be one of {', '.join(repr(v) for v in CLEARANCE_STATES)}",
+            key="initial.clearance_state",
+            value=value,
+        )
+    return value
 
 
 def _gravity(data: dict, where: str) -> tuple[float, float, float]:
