@@ -577,23 +577,14 @@ def load_scene(name_or_path: str | Path, overrides: Mapping[str, Any] | None = N
     return scene_from_document(data, path, base_dir)
 
 
-def scene_from_document(data: dict[str, Any], path: Path, base_dir: Path) -> Scene:
-    """Validate a scene's TOML document (``extends`` already merged); relative paths from ``base_dir``."""
-    document = copy.deepcopy(data)
-    data = copy.deepcopy(data)
-    where = f"scene {path.name}"
-    _unknown(data, _TOP_KEYS, where)
-    mechanism_path = resolve_mechanism(data.get("mechanism"), base_dir, where)
-    name = data.get("name", path.stem)
-    if not isinstance(name, str):
-        raise SceneError(f"{where}: name={name!r} must be a string", key="name", value=name)
-    solver_table = _table(data, "solver", where)
-    _unknown(solver_table, _SOLVER_KEYS, f"{where} [solver]")
+def _solver(solver_table: dict, where: str) -> SolverOptions:
+    """``[solver]``: a registered method and its tolerances (fixed-step methods need ``first_step``)."""
+    w = f"{where} [solver]"
+    _unknown(solver_table, _SOLVER_KEYS, w)
     method = solver_table.get("method", "RK45")
     if method not in METHODS:
         hint = " (the CVODE methods need the scikit-sundae package: pip install scikit-sundae)" if method.startswith("CVODE") else ""
-        raise SceneError(f"{where} [solver]: method={method!r} is not on offer{hint}; choose one of {', '.join(METHODS)}", key="method", value=method)
-    w = f"{where} [solver]"
+        raise SceneError(f"{w}: method={method!r} is not on offer{hint}; choose one of {', '.join(METHODS)}", key="method", value=method)
     numbers = (
         _number(solver_table, "rtol", w, 1e-7, low=1e-14, high=1e-1),
         _number(solver_table, "atol", w, 1e-9, low=1e-16, high=1e-1),
@@ -605,21 +596,41 @@ def scene_from_document(data: dict[str, Any], path: Path, base_dir: Path) -> Sce
     except ValueError as exc:  # SolverOptions checks its choices (the jacobian)
         raise SceneError(f"{w}: {exc}", key=getattr(exc, "key", None), value=getattr(exc, "value", None)) from None
     if method in FIXED_STEP_METHODS and solver.first_step is None:
-        raise SceneError(f"{w}: the fixed-step method {method} needs first_step (its step size)")
-    baumgarte_table = _table(data, "baumgarte", where)
-    _unknown(baumgarte_table, _BAUMGARTE_KEYS, f"{where} [baumgarte]")
+        raise SceneError(f"{w}: the fixed-step method {method} needs first_step (its step size)", key="first_step", value=None)
+    return solver
+
+
+def _baumgarte(table: dict, where: str) -> Baumgarte:
     w = f"{where} [baumgarte]"
-    baumgarte = Baumgarte(_number(baumgarte_table, "alpha", w, 5.0, low=0.0, high=1e6), _number(baumgarte_table, "beta", w, 5.0, low=0.0, high=1e6))
-    limits_table = _table(data, "limits", where)
-    _unknown(limits_table, _LIMIT_KEYS, f"{where} [limits]")
+    _unknown(table, _BAUMGARTE_KEYS, w)
+    return Baumgarte(_number(table, "alpha", w, 5.0, low=0.0, high=1e6), _number(table, "beta", w, 5.0, low=0.0, high=1e6))
+
+
+def _limits(table: dict, where: str) -> FailureLimits:
     w = f"{where} [limits]"
+    _unknown(table, _LIMIT_KEYS, w)
     defaults = FailureLimits()
-    limits = FailureLimits(
-        _number(limits_table, "penetration_ratio", w, defaults.penetration_ratio, low=0.0, low_open=True),
-        _number(limits_table, "max_residual", w, defaults.max_residual, low=0.0, low_open=True),
-        _number(limits_table, "min_step", w, defaults.min_step, low=0.0),
-        _number(limits_table, "max_wall_time", w, defaults.max_wall_time, low=0.0, low_open=True),
+    return FailureLimits(
+        _number(table, "penetration_ratio", w, defaults.penetration_ratio, low=0.0, low_open=True),
+        _number(table, "max_residual", w, defaults.max_residual, low=0.0, low_open=True),
+        _number(table, "min_step", w, defaults.min_step, low=0.0),
+        _number(table, "max_wall_time", w, defaults.max_wall_time, low=0.0, low_open=True),
     )
+
+
+def scene_from_document(data: dict[str, Any], path: Path, base_dir: Path) -> Scene:
+    """Validate a scene's TOML document (``extends`` already merged); relative paths from ``base_dir``."""
+    document = copy.deepcopy(data)
+    data = copy.deepcopy(data)
+    where = f"scene {path.name}"
+    _unknown(data, _TOP_KEYS, where)
+    mechanism_path = resolve_mechanism(data.get("mechanism"), base_dir, where)
+    name = data.get("name", path.stem)
+    if not isinstance(name, str):
+        raise SceneError(f"{where}: name={name!r} must be a string", key="name", value=name)
+    solver = _solver(_table(data, "solver", where), where)
+    baumgarte = _baumgarte(_table(data, "baumgarte", where), where)
+    limits = _limits(_table(data, "limits", where), where)
     materials = _materials(data, where)
     clearance_list = data.get("clearance", [])
     if not isinstance(clearance_list, list):
