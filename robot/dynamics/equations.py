@@ -245,8 +245,17 @@ class CompiledTerms:
         self.actuator_v = np.asarray(dynamics.mechanism.actuator_v_index, dtype=np.int64)
         if not kernel.driven:
             self.actuator_q = self.actuator_v = np.zeros(0, dtype=np.int64)
-        # per contact site a CompiledSite; its masks, twists and output buffer are views of the
-        # packed arrays that all_sites reads
+        compiled_law = self._build_sites(dynamics, model)
+        self.laws_compiled = all(compiled_law)
+        # every site in one compiled call (rhs_kernels.all_sites) when every law is a shipped compiled law
+        self.fused = None
+        if self.sites and self.laws_compiled and all(site.law_kernel in K.LAW_IDS for site in self.sites):
+            self._build_fused(dynamics)
+        self._build_output_views(dynamics)
+
+    def _build_sites(self, dynamics: DynamicsModel, model: pin.Model) -> list[bool]:
+        """One :class:`CompiledSite` per contact site; returns which sites' laws run compiled."""
+        # its masks, twists and output buffer are views of the packed arrays that all_sites reads
         laws = [contact.law for contact in dynamics.contacts]
         # compiled: a law whose type has a kernel id (known to rhs_kernels.law_kernel) and whose kernel
         # does everything (``law.kernel`` is None e.g. for a user-defined friction law); others: ``evaluate``
@@ -275,31 +284,33 @@ class CompiledTerms:
                 )
             )
             offset += size
-        self.laws_compiled = all(compiled_law)
-        # every site in one compiled call (rhs_kernels.all_sites) when every law is a shipped compiled law
-        self.fused = None
-        if self.sites and self.laws_compiled and all(site.law_kernel in K.LAW_IDS for site in self.sites):
-            self.fused = K.all_sites
-            self.site_parameters = np.concatenate([site.parameters for site in self.sites])
-            table = np.zeros((len(self.sites), K.SITE_COLUMNS), dtype=np.int64)
-            first_parameter = first_output = 0
-            for row, (kernel, parameters, _, outer, inner, candidates, _, buffer, w_outer, w_inner) in zip(table, self.sites):
-                row[K.SITE_LAW] = K.LAW_IDS[kernel]
-                row[K.SITE_OUTER], row[K.SITE_INNER] = outer, inner
-                row[K.SITE_FIRST], row[K.SITE_LAST] = candidates.start, candidates.stop
-                row[K.SITE_PARAMETERS], row[K.SITE_PARAMETERS_END] = first_parameter, first_parameter + parameters.shape[0]
-                row[K.SITE_OUT], row[K.SITE_OUT_END] = first_output, first_output + buffer.shape[0]
-                row[K.SITE_WRENCH_OUTER], row[K.SITE_WRENCH_INNER] = w_outer, w_inner
-                first_parameter, first_output = first_parameter + parameters.shape[0], first_output + buffer.shape[0]
-            self.site_table = table
-            # per candidate: where its penetration, rate and normal force lie in the packed outputs (the probe)
-            gather = np.zeros((self.n_candidates, 3), dtype=np.int64)
-            for contact, row in zip(dynamics.contacts, table):
-                law, first = contact.law, row[K.SITE_OUT]
-                for j in range(law.n_candidates):
-                    candidate = contact.candidates.start + j
-                    gather[candidate] = (first + law.PENETRATION + j, first + law.PENETRATION_RATE + j, first + law.NORMAL_FORCE + j)
-            self.probe_gather = gather
+        return compiled_law
+
+    def _build_fused(self, dynamics: DynamicsModel) -> None:
+        """The packed site table of :func:`robot.dynamics.rhs_kernels.all_sites` and the probe's gather indices."""
+        self.fused = K.all_sites
+        self.site_parameters = np.concatenate([site.parameters for site in self.sites])
+        table = np.zeros((len(self.sites), K.SITE_COLUMNS), dtype=np.int64)
+        first_parameter = first_output = 0
+        for row, (kernel, parameters, _, outer, inner, candidates, _, buffer, w_outer, w_inner) in zip(table, self.sites):
+            row[K.SITE_LAW] = K.LAW_IDS[kernel]
+            row[K.SITE_OUTER], row[K.SITE_INNER] = outer, inner
+            row[K.SITE_FIRST], row[K.SITE_LAST] = candidates.start, candidates.stop
+            row[K.SITE_PARAMETERS], row[K.SITE_PARAMETERS_END] = first_parameter, first_parameter + parameters.shape[0]
+            row[K.SITE_OUT], row[K.SITE_OUT_END] = first_output, first_output + buffer.shape[0]
+            row[K.SITE_WRENCH_OUTER], row[K.SITE_WRENCH_INNER] = w_outer, w_inner
+            first_parameter, first_output = first_parameter + parameters.shape[0], first_output + buffer.shape[0]
+        self.site_table = table
+        # per candidate: where its penetration, rate and normal force lie in the packed outputs (the probe)
+        gather = np.zeros((self.n_candidates, 3), dtype=np.int64)
+        for contact, row in zip(dynamics.contacts, table):
+            law, first = contact.law, row[K.SITE_OUT]
+            for j in range(law.n_candidates):
+                candidate = contact.candidates.start + j
+                gather[candidate] = (first + law.PENETRATION + j, first + law.PENETRATION_RATE + j, first + law.NORMAL_FORCE + j)
+        self.probe_gather = gather
+
+    def _build_output_views(self, dynamics: DynamicsModel) -> None:
         # per site: candidate slice and views of its law's penetration, rate and normal force outputs
         self.site_outputs = []
         for contact, site in zip(dynamics.contacts, self.sites):
