@@ -255,7 +255,7 @@ def claims_json(claims: list[Claim]) -> list[dict]:
 def claims_report(claims: list[Claim]) -> str:
     """A short Markdown report: one row per claim, then the numbers."""
     lines = ["# The seed paper's claims, measured", "", "| claim | the paper says | measured | verdict |", "| --- | --- | --- | --- |"]
-    lines += [f"| ({c.label}) | {c.statement} | {c.measured} | **{c.verdict()}** ({c.criterion}) |" for c in claims]
+    lines += [f"| ({c.label}) | {c.statement} | {c.measured} | **{c.verdict()}** (holds when: {c.criterion}) |" for c in claims]
     lines += ["", "Definitions, thresholds and sources: `robot/analysis/claims.py`; the reasoning: `docs/parameters.md`.", ""]
     for c in claims:
         lines.append(f"## ({c.label}) {c.statement}")
