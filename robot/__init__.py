@@ -43,3 +43,7 @@ __all__ = sorted(_PUBLIC)
 
 
 __getattr__, __dir__ = lazy_exports(__name__, globals(), _PUBLIC)
+
+from robot import compat as _compat  # noqa: E402 (the old flat module paths, as aliases)
+
+_compat.install()

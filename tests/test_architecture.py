@@ -10,7 +10,7 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 
 #: the stages of robot/, in the order data flows (a module may import its own stage and earlier ones)
-STAGES = ["errors", "data", "scene", "model", "dynamics", "integration", "io", "run", "validation", "analysis", "viz", "sweep", "cli", "__init__"]
+STAGES = ["errors", "data", "scene", "model", "dynamics", "integration", "io", "run", "validation", "analysis", "viz", "sweep", "cli", "compat", "__init__"]
 
 #: declarations of later stages that the scene layer validates against: registries and plain data,
 #: none of which imports Pinocchio (test_scene_parsing_imports_no_pinocchio checks that)
@@ -78,3 +78,21 @@ def test_scene_parsing_imports_no_pinocchio():
 def test_public_api_and_contact_errors_import_lazily():
     loaded = _loaded_after("import robot, robot.errors, robot.analysis; robot.Error")
     assert not loaded & {"pinocchio", "numba", "scipy", "matplotlib", "exudyn", "dask"}, loaded
+
+
+def test_old_module_paths_are_aliases_of_the_new_modules():
+    """Code written against the flat robot/ of before keeps working (with a DeprecationWarning)."""
+    import importlib
+    import warnings
+
+    from robot.compat import MOVED
+
+    for old, new in MOVED.items():
+        with warnings.catch_warnings(record=True):
+            warnings.simplefilter("always")
+            alias = importlib.import_module(old)
+        assert alias is importlib.import_module(new) and alias.__spec__.name == new, old
+    from robot.results import load_result as old_load  # noqa: F401 (the old spelling)
+    from robot.io.results import load_result
+
+    assert old_load is load_result
