@@ -73,6 +73,27 @@ def test_map_png(tmp_path):
         map_figure(x, y, values.T, x_label="", y_label="", value_label="")
 
 
+def test_map_on_a_log_axis_centres_equal_cells_on_the_values():
+    """A log-spaced axis drawn on a log scale: every value sits in the middle (geometric) of its cell,
+    all cells equally wide in log space, and unsorted axes are drawn sorted with their values."""
+    x, y = np.geomspace(2e-5, 5e-4, 8), np.array([30.0, 10.0, 20.0])
+    values = np.arange(24.0).reshape(3, 8)
+    figure = map_figure(x, y, values, x_label="clearance (m)", y_label="speed", value_label="v", x_scale="log")
+    axes = figure.axes[0]
+    assert axes.get_xscale() == "log" and axes.get_yscale() == "linear"
+    mesh = axes.collections[0]
+    corners = mesh.get_coordinates()  # (len(y)+1, len(x)+1, 2)
+    x_edges, y_edges = corners[0, :, 0], corners[:, 0, 1]
+    np.testing.assert_allclose(np.sqrt(x_edges[1:] * x_edges[:-1]), x, rtol=1e-12)
+    np.testing.assert_allclose(np.diff(np.log(x_edges)), np.log(x[1] / x[0]), rtol=1e-12)
+    np.testing.assert_allclose(y_edges, [5.0, 15.0, 25.0, 35.0])
+    np.testing.assert_allclose(np.asarray(mesh.get_array()).reshape(3, 8), values[[1, 2, 0]])  # rows sorted by y
+    with pytest.raises(AnalysisError, match="x_scale='log' needs positive values"):
+        map_figure(x - 1.0, y, values, x_label="", y_label="", value_label="", x_scale="log")
+    with pytest.raises(AnalysisError, match="y_scale must be 'linear' or 'log'"):
+        map_figure(x, y, values, x_label="", y_label="", value_label="", y_scale="symlog")
+
+
 def test_waterfall_png(tmp_path):
     parameter = np.array([0.1, 0.2, 0.3, 0.4])
     frequency = np.linspace(0, 50, 200)

@@ -66,6 +66,7 @@ def test_bad_sweep_file_exits_2_naming_key_and_value_before_any_run(tmp_path, ca
         ('\n[[analysis]]\nname = "peak_rms"\nsignal = "t"\nwindow = 3\n', "window"),
         ('\n[[figure]]\nkind = "map"\nx = "clearance_S1_clearance"\ny = "nope"\nvalue = "S1_force_peak"\n', "figure.y"),
         ('\n[[figure]]\nkind = "lines"\nx = "clearance_S1_clearance"\nvalues = ["S1_force_pk"]\n', "figure.values"),
+        ('\n[[figure]]\nkind = "map"\nx = "clearance_S1_clearance"\ny = "clearance_S1_clearance"\nvalue = "status"\nx_scale = "logarithmic"\n', "figure.x_scale"),
         ('\n[keep]\narrays = ["ee_position", "ee_position"]\n', "keep.arrays"),
         ("\n[bogus]\n", "bogus"),
     ],

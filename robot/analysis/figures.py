@@ -44,9 +44,31 @@ def bifurcation_figure(diagram: BifurcationDiagram, *, marker_size: float = 1.0)
     return figure
 
 
-def map_figure(x, y, values, *, x_label: str, y_label: str, value_label: str, log_scale: bool = False) -> Figure:
-    """A scalar over two swept parameters: ``values`` (len(y), len(x)) as a pcolormesh with a colour bar."""
+def cell_edges(centres: np.ndarray, scale: str = "linear") -> np.ndarray:
+    """Edges of the cells around sorted ``centres``: midpoints, geometric on a log axis (so the cells of a
+    log-spaced axis look equal on it); the end cells are as wide as their neighbours."""
+    values = np.log(centres) if scale == "log" else np.asarray(centres, dtype=float)
+    if values.size == 1:
+        edges = values[0] + np.array([-0.5, 0.5]) * (1.0 if scale == "linear" else 0.1)
+    else:
+        inner = 0.5 * (values[1:] + values[:-1])
+        edges = np.concatenate([[2.0 * values[0] - inner[0]], inner, [2.0 * values[-1] - inner[-1]]])
+    return np.exp(edges) if scale == "log" else edges
+
+
+def map_figure(
+    x, y, values, *, x_label: str, y_label: str, value_label: str, log_scale: bool = False, x_scale: str = "linear", y_scale: str = "linear"
+) -> Figure:
+    """A scalar over two swept parameters: ``values`` (len(y), len(x)) as a pcolormesh with a colour bar.
+
+    ``x_scale``/``y_scale``: "linear" or "log" (a log axis needs positive values; cells centred on them).
+    """
     xs, ys = require_array("x", x, 1), require_array("y", y, 1)
+    for name, scale, centres in (("x_scale", x_scale, xs), ("y_scale", y_scale, ys)):
+        if scale not in ("linear", "log"):
+            raise AnalysisError(f"{name} must be 'linear' or 'log', got {scale!r}")
+        if scale == "log" and not np.all(centres > 0):
+            raise AnalysisError(f"{name}='log' needs positive values, got {centres.min():g}")
     data = np.asarray(values, dtype=float)
     if data.shape != (len(ys), len(xs)):
         raise AnalysisError(f"values must be (len(y)={len(ys)}, len(x)={len(xs)}), got shape {data.shape}")
@@ -60,9 +82,11 @@ def map_figure(x, y, values, *, x_label: str, y_label: str, value_label: str, lo
         if positive.size == 0:
             raise AnalysisError("log_scale needs positive values")
         norm = LogNorm(positive.min(), positive.max())
-    mesh = axes.pcolormesh(xs, ys, np.ma.masked_invalid(data), shading="nearest", norm=norm)
+    x_order, y_order = np.argsort(xs), np.argsort(ys)
+    ordered = np.ma.masked_invalid(data[np.ix_(y_order, x_order)])
+    mesh = axes.pcolormesh(cell_edges(xs[x_order], x_scale), cell_edges(ys[y_order], y_scale), ordered, shading="flat", norm=norm)
     figure.colorbar(mesh, ax=axes, label=value_label)
-    axes.set(xlabel=x_label, ylabel=y_label)
+    axes.set(xlabel=x_label, ylabel=y_label, xscale=x_scale, yscale=y_scale)
     return figure
 
 
