@@ -1,8 +1,11 @@
 """The integrators on offer: scipy's ``OdeSolver`` family, fixed-step schemes and SUNDIALS CVODE.
 
-Every method is an ``scipy.integrate.OdeSolver`` subclass, stepped one accepted
-step at a time by :mod:`robot.integration.simulation` (so each step is recorded, checked and
-scanned for events). Fixed-step schemes take ``first_step`` as their step size.
+Every method is a one-step solver with the contract of ``scipy.integrate.OdeSolver``
+(scipy's methods are its subclasses, the package's own subclass
+:class:`robot.integration.solver_base.OdeSolver`, which mirrors it without importing
+scipy), stepped one accepted step at a time by :mod:`robot.integration.simulation`
+(so each step is recorded, checked and scanned for events). Fixed-step schemes
+take ``first_step`` as their step size.
 
 * ``RK23``, ``RK45``, ``DOP853``, ``Radau``, ``BDF``, ``LSODA``: scipy, variable step;
 * ``RK4``: classical Runge-Kutta, fixed step, explicit;
@@ -36,12 +39,11 @@ from dataclasses import dataclass
 from typing import Callable
 
 import numpy as np
-from scipy.integrate import OdeSolver
-from scipy.integrate._ivp.base import DenseOutput
 
 from robot.integration import cvode_direct
 from robot.integration import methods as registry
 from robot.integration.dense import HermiteDense
+from robot.integration.solver_base import DenseOutput, OdeSolver
 # the old trait tables, as live views of the registry (robot.integration.methods)
 from robot.integration.methods import FIXED_STEP_METHODS, JACOBIAN_METHODS, METHODS, STAGES, STRUCTURED_METHODS  # noqa: F401
 
