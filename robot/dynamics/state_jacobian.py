@@ -65,6 +65,7 @@ from __future__ import annotations
 
 import numpy as np
 import pinocchio as pin
+from scipy.linalg import cho_factor, cho_solve
 
 from clearance_contact import ContactError
 
@@ -95,7 +96,6 @@ class StateJacobian:
         largest = max((site.outputs.shape[0] for site in compiled.sites), default=0)
         self.scratch = (np.zeros((12, 24)), np.zeros((12, nv)), (np.zeros((2, 3, 3)), np.zeros((2, 3)), np.zeros((2, 6)), np.zeros(largest)))
         self.law_ids = [K.LAW_IDS[site.law_kernel] for site in compiled.sites]
-        self.identity = np.eye(nv)
         self.calls = 0
 
     def contact_stiffness(self, t: float, onset_rates: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -134,8 +134,9 @@ class StateJacobian:
         dtau_c_dxi, dtau_c_dv = self.contact_stiffness(t, onset_rates)
         drnea_dq, drnea_dv, _ = pin.computeRNEADerivatives(model, data, q, v, qdd)
         # M^-1 [Phi_q^T, F_xi, F_v] with one Cholesky factorisation (crba filled M's upper triangle)
+        factor = cho_factor(data.M, lower=False, check_finite=False)
         m = phi_q.shape[0]
-        solved = mass_inverse_times(data.M, np.hstack([phi_q.T, dtau_c_dxi - drnea_dq, dtau_c_dv - drnea_dv]), self.identity)
+        solved = cho_solve(factor, np.hstack([phi_q.T, dtau_c_dxi - drnea_dq, dtau_c_dv - drnea_dv]), check_finite=False)
         mass_inverse_phi_t = solved[:, :m]
         # S^-1 Phi_q [M^-1 F_xi, M^-1 F_v, I]: then P F = M^-1 F - M^-1 Phi_q^T S^-1 Phi_q M^-1 F,
         # X Phi_q = M^-1 Phi_q^T S^-1 Phi_q and X^T F = S^-1 Phi_q M^-1 F
@@ -166,24 +167,6 @@ class StateJacobian:
             out[nq + nv, nq : nq + nv] += forces.from_actuators
             out[nq + nv + 2, nq : nq + nv] = forces.from_elements
         return out
-
-
-def mass_inverse_times(mass: np.ndarray, rhs: np.ndarray, identity: np.ndarray) -> np.ndarray:
-    """``M^-1 rhs`` for the mass matrix given by its upper triangle (Pinocchio's ``crba``), by Cholesky.
-
-    ``M = U^T U`` (LAPACK ``potrf``; numpy's reads the lower triangle, here of ``M^T``);
-    numpy has no triangular solver, so ``U^-1`` comes from ``solve(U, I)`` (partial
-    pivoting makes no row exchange on an upper triangular matrix: back substitution)
-    and ``M^-1 rhs = U^-1 (U^-T rhs)``, two products. Differs from
-    ``scipy.linalg.cho_solve`` at rounding level (a triangular inverse is as
-    accurate as the substitution, Higham, *Accuracy and Stability of Numerical
-    Algorithms*, 2nd ed., ch. 8 and 14) and costs less for the ~60 right-hand sides
-    here; avoids importing ``scipy.linalg`` (issue 16). ``numpy.linalg.LinAlgError``
-    if ``M`` is not positive definite.
-    """
-    upper = np.linalg.cholesky(mass.T).T  # (numpy >= 2 has upper=True; the package supports 1.26)
-    upper_inverse = np.linalg.solve(upper, identity)
-    return upper_inverse @ (upper_inverse.T @ rhs)
 
 
 def for_workspace(dynamics: D.DynamicsModel, workspace: D.DynamicsWorkspace) -> StateJacobian | None:
