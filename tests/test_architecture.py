@@ -96,3 +96,57 @@ def test_old_module_paths_are_aliases_of_the_new_modules():
     from robot.io.results import load_result
 
     assert old_load is load_result
+
+
+#: what `clearance run` does (CLI, scene build, CVODE_BDF run with contact events and the structured
+#: Jacobian), then the fixed-step methods on the same model; prints the scipy modules then loaded
+_RUN_WITHOUT_SCIPY = """
+import dataclasses, sys
+from robot.cli.main import main
+status = main(["run", "--scene", "compound_misaligned", "--t-end", "0.001", "--out", sys.argv[1]])
+assert status in (0, None), status
+from robot.integration.simulation import integrate
+from robot.run import build_run
+run = build_run("compound_misaligned", duration=2e-5)
+for method in ("RK4", "GenAlpha", "Newmark"):
+    options = dataclasses.replace(run.scene.solver, method=method, first_step=5e-6)
+    assert integrate(run.dynamics, run.y0, run.t_span, options, run.scene.limits).success, method
+print("scipy modules:", *sorted(m for m in sys.modules if m == "scipy" or m.startswith("scipy.")))
+"""
+
+
+#: scipy's subpackages a CVODE or fixed-step run must not load (0.3-0.8 s of imports together)
+_HEAVY_SCIPY = ("scipy.integrate", "scipy.optimize", "scipy.sparse", "scipy.special", "scipy.interpolate", "scipy.stats", "scipy.spatial")
+
+
+def test_a_cvode_or_fixed_step_run_imports_no_heavy_scipy(tmp_path):
+    """scipy's integrators, root finders and sparse matrices cost 0.3-0.8 s to import (issue 16):
+    CVODE and the fixed-step methods need none of them.
+
+    ``scipy.linalg`` stays: the structured Jacobian's Cholesky solve
+    (``cho_factor``/``cho_solve``: replacing it changes the Jacobian at rounding level,
+    which moves a run's later force peaks by up to 3e-4 at rtol 1e-6), and numba
+    imports it anyway when its compiler starts. The compiled kernels are switched
+    off (``CLEARANCE_CONTACT_JIT=0``, a short run in plain Python) to keep the test short.
+    """
+    import os
+
+    environment = dict(os.environ, CLEARANCE_CONTACT_JIT="0")
+    done = subprocess.run(
+        [sys.executable, "-c", _RUN_WITHOUT_SCIPY, str(tmp_path)], cwd=ROOT, env=environment, capture_output=True, text=True, timeout=120
+    )
+    assert done.returncode == 0, done.stderr[-3000:]
+    (report,) = [line for line in done.stdout.splitlines() if line.startswith("scipy modules:")]
+    loaded = [name for name in report.split()[2:] if name.startswith(_HEAVY_SCIPY)]
+    assert loaded == [], f"scipy modules imported by a CVODE / fixed-step run: {loaded}"
+
+
+def test_scipy_methods_are_imported_on_first_use():
+    """The registry names scipy's methods as "module:attribute": their class comes when a run asks for it."""
+    loaded = _loaded_after(
+        "from robot.integration import methods; assert 'scipy' not in sys.modules; "
+        "from robot.integration.solvers import make_solver; import numpy as np; "
+        "s = make_solver('Radau', lambda t, y: -y, 0.0, np.ones(2), 1.0, 1e-6, 1e-9, np.inf, None); s.step(); "
+        "assert type(s).__module__.startswith('scipy.integrate') and s.status == 'running'"
+    )
+    assert "scipy" in loaded

@@ -14,11 +14,11 @@ alone, of the force-peak search's earlier steps (:mod:`robot.integration.force_p
 from __future__ import annotations
 
 import numpy as np
-from scipy.integrate._ivp.base import DenseOutput
+from robot.integration.solver_base import DenseOutput
 
 
 class HermiteDense(DenseOutput):
-    """Cubic Hermite interpolation between two states (values and derivatives), a ``scipy`` dense output."""
+    """Cubic Hermite interpolation between two states (values and derivatives), a dense output with scipy's contract."""
 
     def __init__(self, t_old: float, t: float, y_old: np.ndarray, f_old: np.ndarray, y: np.ndarray, f: np.ndarray):
         super().__init__(t_old, t)

@@ -1,6 +1,7 @@
 """The event-driven step loop: one accepted solver step at a time, with contact events and failure checks.
 
-:class:`EventDrivenIntegrator` steps a ``scipy.integrate.OdeSolver`` (any method
+:class:`EventDrivenIntegrator` steps a solver with the contract of
+``scipy.integrate.OdeSolver`` (:mod:`robot.integration.solver_base`; any method
 of the registry, :mod:`robot.integration.methods`) over a system that
 implements the narrow :class:`EventSystem` protocol: the Lagrange model
 (:class:`robot.integration.simulation.LagrangeSystem`) and the Newton-Euler
@@ -38,11 +39,11 @@ import time
 from typing import Callable, NamedTuple, Protocol
 
 import numpy as np
-from scipy.optimize import brentq
 
 from clearance_contact import ONSET_RATE_FLOOR, ContactError
 
 from robot.integration import methods as registry
+from robot.integration.brent import brentq
 from robot.integration.events import HIDDEN, ONSET, OVER_BOUND, PEAK, all_finite, first_contact_time, hidden_contact, step_flags
 from robot.integration.force_peaks import ForcePeaks, derivative_or_inf
 from robot.integration.options import FailureLimits, SolverOptions

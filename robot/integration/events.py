@@ -16,9 +16,10 @@ import math
 from typing import Callable
 
 import numpy as np
-from scipy.optimize import brentq
 
 from clearance_contact.compiled import jit
+
+from robot.integration.brent import brentq
 
 # what an accepted step needs beyond the routine checks (bit flags of step_flags)
 ONSET, HIDDEN, OVER_BOUND, PEAK = 1, 2, 4, 8

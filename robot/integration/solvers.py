@@ -1,8 +1,11 @@
 """The integrators on offer: scipy's ``OdeSolver`` family, fixed-step schemes and SUNDIALS CVODE.
 
-Every method is an ``scipy.integrate.OdeSolver`` subclass, stepped one accepted
-step at a time by :mod:`robot.integration.simulation` (so each step is recorded, checked and
-scanned for events). Fixed-step schemes take ``first_step`` as their step size.
+Every method is a one-step solver with the contract of ``scipy.integrate.OdeSolver``
+(scipy's methods are its subclasses, the package's own subclass
+:class:`robot.integration.solver_base.OdeSolver`, which mirrors it without importing
+scipy), stepped one accepted step at a time by :mod:`robot.integration.simulation`
+(so each step is recorded, checked and scanned for events). Fixed-step schemes
+take ``first_step`` as their step size.
 
 * ``RK23``, ``RK45``, ``DOP853``, ``Radau``, ``BDF``, ``LSODA``: scipy, variable step;
 * ``RK4``: classical Runge-Kutta, fixed step, explicit;
@@ -31,17 +34,17 @@ not expose it (reported as -1).
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass
 from typing import Callable
 
 import numpy as np
-from scipy.integrate import OdeSolver
-from scipy.integrate._ivp.base import DenseOutput
 
 from robot.integration import cvode_direct
 from robot.integration import methods as registry
 from robot.integration.dense import HermiteDense
+from robot.integration.solver_base import DenseOutput, OdeSolver
 # the old trait tables, as live views of the registry (robot.integration.methods)
 from robot.integration.methods import FIXED_STEP_METHODS, JACOBIAN_METHODS, METHODS, STAGES, STRUCTURED_METHODS  # noqa: F401
 
@@ -296,10 +299,19 @@ class Newmark(GeneralizedAlpha):
         super().__init__(*args, **kwargs)
 
 
-try:  # SUNDIALS CVODE through scikit-sundae (a dependency; guarded so the rest works without it)
-    from sksundae.cvode import CVODE as _CVODE
-except ImportError:  # pragma: no cover - depends on the environment
-    _CVODE = None
+@functools.cache
+def scikit_sundae_cvode() -> type | None:
+    """scikit-sundae's ``CVODE`` binding class, or None without the package.
+
+    Imported on first use only, where the direct C interface is not available:
+    importing ``sksundae`` imports ``scipy.sparse`` and ``scipy.optimize``
+    (0.3-0.6 s), which a run through :mod:`robot.integration.cvode_direct` never uses.
+    """
+    try:  # SUNDIALS CVODE through scikit-sundae (a dependency; guarded so the rest works without it)
+        from sksundae.cvode import CVODE
+    except ImportError:  # pragma: no cover - depends on the environment
+        return None
+    return CVODE
 
 
 class _CVODEDense(DenseOutput):
@@ -340,7 +352,9 @@ class _CVODEBase(OdeSolver):
     min_step = 1e-12
 
     def __init__(self, fun, t0, y0, t_bound, rtol=1e-3, atol=1e-6, max_step=np.inf, first_step=None, vectorized=False, jac=None, **extraneous):
-        if _CVODE is None:
+        direct = cvode_direct.available()
+        binding = None if direct else scikit_sundae_cvode()
+        if not direct and binding is None:
             raise ValueError("CVODE needs the scikit-sundae package (pip install scikit-sundae)")
         super().__init__(fun, t0, y0, t_bound, vectorized)
 
@@ -364,7 +378,7 @@ class _CVODEBase(OdeSolver):
             options["first_step"] = float(first_step)
         self.failure_cause = None
         self._direct = self._cvode = None
-        if cvode_direct.available():
+        if direct:
             # CVODE's dense matrix is filled in place (``jac(t, y, out)``)
             self._direct = cvode_direct.DirectCVODE(
                 rhsfn, float(t0), np.asarray(y0, dtype=float), jacobian=jac, stop_time=float(t_bound), **options
@@ -375,7 +389,7 @@ class _CVODEBase(OdeSolver):
                 jac(t, y, matrix)
 
             options["jacfn"] = jacfn
-        self._cvode = _CVODE(rhsfn, **options)
+        self._cvode = binding(rhsfn, **options)
         result = self._cvode.init_step(float(t0), np.asarray(y0, dtype=float))
         if result.status < 0:
             raise ValueError(f"CVODE initialisation failed: {result.message}")
