@@ -87,7 +87,22 @@ def map_figure(
     mesh = axes.pcolormesh(cell_edges(xs[x_order], x_scale), cell_edges(ys[y_order], y_scale), ordered, shading="flat", norm=norm)
     figure.colorbar(mesh, ax=axes, label=value_label)
     axes.set(xlabel=x_label, ylabel=y_label, xscale=x_scale, yscale=y_scale)
+    _label_log_cells(axes.xaxis, xs, x_scale)
+    _label_log_cells(axes.yaxis, ys, y_scale)
+    if "log" in (x_scale, y_scale):
+        figure.tight_layout(rect=(0.0, 0.0, 1.0, 0.95))  # room for the rotated values and the title
     return figure
+
+
+def _label_log_cells(axis, centres: np.ndarray, scale: str) -> None:
+    """On a log axis, one tick per cell at its value (matplotlib's minor-tick labels overlap within a decade)."""
+    if scale != "log":
+        return
+    from matplotlib.ticker import NullFormatter, NullLocator
+
+    axis.set_minor_locator(NullLocator())
+    axis.set_minor_formatter(NullFormatter())
+    axis.set_ticks(centres, [f"{value:.3g}" for value in centres], fontsize=8, rotation=30 if axis.axis_name == "x" else 0)
 
 
 def waterfall_figure(
