@@ -65,7 +65,6 @@ from __future__ import annotations
 
 import numpy as np
 import pinocchio as pin
-from scipy.linalg import cho_factor, cho_solve
 
 from clearance_contact import ContactError
 
@@ -134,6 +133,8 @@ class StateJacobian:
         dtau_c_dxi, dtau_c_dv = self.contact_stiffness(t, onset_rates)
         drnea_dq, drnea_dv, _ = pin.computeRNEADerivatives(model, data, q, v, qdd)
         # M^-1 [Phi_q^T, F_xi, F_v] with one Cholesky factorisation (crba filled M's upper triangle)
+        from scipy.linalg import cho_factor, cho_solve  # on first use: ~0.1 s of imports a run without Jacobians never pays
+
         factor = cho_factor(data.M, lower=False, check_finite=False)
         m = phi_q.shape[0]
         solved = cho_solve(factor, np.hstack([phi_q.T, dtau_c_dxi - drnea_dq, dtau_c_dv - drnea_dv]), check_finite=False)
