@@ -11,7 +11,7 @@ from scipy.integrate import solve_ivp
 from scipy.spatial.transform import Rotation
 
 from robot.analysis import ANALYSES, AnalysisError
-from robot.analysis.lyapunov_benettin import EuclideanFlow, Flow, OdeFlow, benettin_exponent
+from robot.analysis.lyapunov_benettin import EuclideanFlow, Flow, OdeFlow, batch_means_standard_error, benettin_exponent
 from robot.analysis.lyapunov_rosenstein import rosenstein_exponent
 
 LORENZ_EXPONENT = 0.9056  # sigma = 10, rho = 28, beta = 8/3 (Sprott, Chaos and Time-Series Analysis, 2003, App. A)
@@ -32,6 +32,38 @@ def test_benettin_lorenz(lorenz_benettin):
     # measured 0.909 (0.937 after the first 200 intervals): the statistical spread at 200 time units is a few %
     assert lorenz_benettin.exponent == pytest.approx(LORENZ_EXPONENT, abs=0.05)
     assert lorenz_benettin.running.shape == (400,) and lorenz_benettin.times[-1] == pytest.approx(20.0 + 410 * 0.5)
+
+
+def test_benettin_lorenz_standard_error_covers_the_known_value(lorenz_benettin):
+    """The batch-means standard error is a usable error bar: the published exponent lies within
+    3 of them. It is well below the naive one: a stretch beyond the average is followed by a
+    shorter one (ln d's fluctuations are bounded and telescope), which the batches see."""
+    se = lorenz_benettin.standard_error
+    rates = lorenz_benettin.log_stretch / 0.5
+    assert 0.0 < se < 0.1
+    assert abs(lorenz_benettin.exponent - LORENZ_EXPONENT) < 3.0 * se
+    assert se < 0.5 * np.std(rates, ddof=1) / np.sqrt(rates.size)
+
+
+def test_batch_means_standard_error_of_independent_and_correlated_series():
+    """Against the exact variance of the mean: i.i.d. normal (sigma^2 / K) and AR(1),
+    x_k = phi x_(k-1) + e_k, whose long-run variance is sigma_e^2 / (1 - phi)^2; averaged over seeds."""
+    rng = np.random.default_rng(5)
+    k = 400
+    iid = np.mean([batch_means_standard_error(rng.normal(0.0, 2.0, k)) ** 2 for _ in range(400)])
+    assert iid / (4.0 / k) == pytest.approx(1.0, abs=0.12)
+    phi, k = 0.6, 2500
+    ratios = []
+    for _ in range(200):
+        noise = rng.normal(size=k + 200)
+        series = np.empty_like(noise)
+        series[0] = noise[0]
+        for i in range(1, series.size):
+            series[i] = phi * series[i - 1] + noise[i]
+        ratios.append(batch_means_standard_error(series[200:]) ** 2 / (1.0 / (1.0 - phi) ** 2 / k))
+    assert np.mean(ratios) == pytest.approx(1.0, abs=0.15)
+    assert np.isnan(batch_means_standard_error([1.0, 2.0, 3.0]))
+    assert batch_means_standard_error(np.full(50, 7.0)) == 0.0
 
 
 def test_benettin_ueda_oscillator():

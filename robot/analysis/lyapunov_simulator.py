@@ -56,6 +56,7 @@ def start_index(t: np.ndarray, t_start: float | None) -> int:
     ),
     outputs=(
         Field("exponent", (), "1/s", "largest Lyapunov exponent estimate"),
+        Field("standard_error", (), "1/s", "standard error of the exponent by batch means (NaN below 4 intervals)"),
         Field("running", ("interval",), "1/s", "estimate after each averaged interval"),
         Field("log_stretch", ("interval",), "1", "ln(d_k / d0) of each averaged interval"),
         Field("t_start", (), "s", "time of the record the pair started from"),
@@ -106,6 +107,7 @@ def lyapunov_benettin(
     )
     return {
         "exponent": result.exponent,
+        "standard_error": result.standard_error,
         "running": result.running,
         "log_stretch": result.log_stretch,
         "t_start": t0,
