@@ -88,9 +88,12 @@ def test_map_on_a_log_axis_centres_equal_cells_on_the_values():
     np.testing.assert_allclose(np.diff(np.log(x_edges)), np.log(x[1] / x[0]), rtol=1e-12)
     np.testing.assert_allclose(y_edges, [5.0, 15.0, 25.0, 35.0])
     np.testing.assert_allclose(np.asarray(mesh.get_array()).reshape(3, 8), values[[1, 2, 0]])  # rows sorted by y
+    many = np.geomspace(1e-5, 1e-3, 30)  # more cells than readable labels: every k-th, both ends
+    ticks = map_figure(many, y, np.ones((3, 30)), x_label="", y_label="", value_label="", x_scale="log").axes[0].get_xticks()
+    assert len(ticks) <= 13 and ticks[0] == many[0] and ticks[-1] == many[-1] and set(ticks) <= set(many)
     with pytest.raises(AnalysisError, match="x_scale='log' needs positive values"):
         map_figure(x - 1.0, y, values, x_label="", y_label="", value_label="", x_scale="log")
-    with pytest.raises(AnalysisError, match="y_scale must be 'linear' or 'log'"):
+    with pytest.raises(AnalysisError, match=r"y_scale must be one of \('linear', 'log'\)"):
         map_figure(x, y, values, x_label="", y_label="", value_label="", y_scale="symlog")
 
 

@@ -90,3 +90,13 @@ def test_dense_output_before_a_step_and_bad_inputs_fail_as_scipy():
     solver.step()
     with pytest.raises(ValueError):
         solver.dense_output()(np.zeros((2, 2)))
+
+
+@pytest.mark.parametrize("method", ["RK4", "GenAlpha", "Newmark"])
+def test_fixed_step_methods_refuse_to_integrate_backwards(method):
+    """They step forward only: a t_bound before t0 is refused (it used to step forward forever)."""
+    from robot.integration.solvers import SecondOrderStructure, make_solver
+
+    structure = SecondOrderStructure(1, 1, lambda q, dq: q + dq)  # y = [x, x']
+    with pytest.raises(ValueError, match=r"integrate forward: t_bound=0\.0 must be >= t0=1\.0"):
+        make_solver(method, oscillator, 1.0, np.array([1.0, 0.0]), 0.0, 1e-6, 1e-9, np.inf, 0.1, structure=structure)

@@ -57,6 +57,38 @@ def test_bad_sweep_file_exits_2_naming_key_and_value_before_any_run(tmp_path, ca
     assert caught.value.key == key
 
 
+def test_a_log_scale_needs_an_axis_of_positive_numbers(tmp_path):
+    names = 'values = ["lankarani_nikravesh", "flores"]'
+    figure = '\n[[figure]]\nkind = "lines"\nx = "clearance_S1_dissipation"\nvalues = ["status"]\nx_scale = "log"\n'
+    with pytest.raises(SweepError, match="x_scale='log' needs an axis x of positive numbers") as caught:
+        load_sweep(_file(tmp_path, key="clearance.S1.dissipation", axis=names, extra=figure))
+    assert caught.value.key == "figure.x_scale"
+    figure = '\n[[figure]]\nkind = "lines"\nx = "clearance_S1_clearance"\nvalues = ["status"]\nx_scale = "log"\n'
+    assert load_sweep(_file(tmp_path, axis="values = [5e-5, 1e-4]", extra=figure)).figures[0]["x_scale"] == "log"
+
+
+def test_map_options_reach_the_drawn_figure(tmp_path):
+    """x_scale, the axis titles and the colour bar's title of a sweep file's map are those of the PNG."""
+    import xarray as xr
+
+    from robot.sweep.figures import draw_map
+
+    clearance, speed = np.geomspace(2e-5, 5e-4, 5), np.array([10.0, 20.0, 30.0])
+    dataset = xr.Dataset(
+        {"peak": (("clearance", "speed"), np.arange(15.0).reshape(5, 3))},
+        coords={"clearance": clearance, "speed": speed},
+        attrs={"coordinates": ["clearance", "speed"]},
+    )
+    figure = {"kind": "map", "x": "clearance", "y": "speed", "value": "peak", "x_scale": "log",
+              "x_label": "clearance (m)", "y_label": "speed (rad/s)", "value_label": "peak (N)"}  # fmt: skip
+    plot, traces = draw_map(dataset, figure, tmp_path)
+    axes, colour_bar = plot.axes
+    assert axes.get_xscale() == "log" and axes.get_xlabel() == "clearance (m)" and axes.get_ylabel() == "speed (rad/s)"
+    assert colour_bar.get_ylabel() == "peak (N)"
+    np.testing.assert_allclose(axes.get_xticks(), clearance)  # one tick per cell on the log axis
+    np.testing.assert_array_equal(traces[0]["z"], dataset["peak"].transpose("speed", "clearance").values)
+
+
 @pytest.mark.parametrize(
     "extra, key",
     [

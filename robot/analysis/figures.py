@@ -44,6 +44,13 @@ def bifurcation_figure(diagram: BifurcationDiagram, *, marker_size: float = 1.0)
     return figure
 
 
+#: the axis scales the figures take
+AXIS_SCALES = ("linear", "log")
+
+#: a log axis labels every cell up to this many, then every k-th
+MAX_CELL_LABELS = 12
+
+
 def cell_edges(centres: np.ndarray, scale: str = "linear") -> np.ndarray:
     """Edges of the cells around sorted ``centres``: midpoints, geometric on a log axis (so the cells of a
     log-spaced axis look equal on it); the end cells are as wide as their neighbours."""
@@ -65,8 +72,8 @@ def map_figure(
     """
     xs, ys = require_array("x", x, 1), require_array("y", y, 1)
     for name, scale, centres in (("x_scale", x_scale, xs), ("y_scale", y_scale, ys)):
-        if scale not in ("linear", "log"):
-            raise AnalysisError(f"{name} must be 'linear' or 'log', got {scale!r}")
+        if scale not in AXIS_SCALES:
+            raise AnalysisError(f"{name} must be one of {AXIS_SCALES}, got {scale!r}")
         if scale == "log" and not np.all(centres > 0):
             raise AnalysisError(f"{name}='log' needs positive values, got {centres.min():g}")
     data = np.asarray(values, dtype=float)
@@ -95,14 +102,17 @@ def map_figure(
 
 
 def _label_log_cells(axis, centres: np.ndarray, scale: str) -> None:
-    """On a log axis, one tick per cell at its value (matplotlib's minor-tick labels overlap within a decade)."""
+    """On a log axis, ticks at the cells' values (matplotlib's minor-tick labels overlap within a decade);
+    beyond :data:`MAX_CELL_LABELS` cells, every k-th, the first and last included."""
     if scale != "log":
         return
     from matplotlib.ticker import NullFormatter, NullLocator
 
+    every = -(-len(centres) // MAX_CELL_LABELS)
+    shown = np.unique(np.append(np.arange(0, len(centres), every), len(centres) - 1))
     axis.set_minor_locator(NullLocator())
     axis.set_minor_formatter(NullFormatter())
-    axis.set_ticks(centres, [f"{value:.3g}" for value in centres], fontsize=8, rotation=30 if axis.axis_name == "x" else 0)
+    axis.set_ticks(centres[shown], [f"{value:.3g}" for value in centres[shown]], fontsize=8, rotation=30 if axis.axis_name == "x" else 0)
 
 
 def waterfall_figure(

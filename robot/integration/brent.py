@@ -43,6 +43,10 @@ RTOL = 4 * 2.220446049250313e-16  # 4 machine epsilons: the smallest relative to
 MAXITER = 100
 
 
+class NoSignChange(ValueError):
+    """f(a) and f(b) have the same sign: no root is bracketed (a ``ValueError``, as scipy's)."""
+
+
 @dataclass(frozen=True)
 class BrentResult:
     """What ``full_output=True`` returns beside the root (the fields of scipy's ``RootResults``)."""
@@ -125,7 +129,7 @@ def _iterate(f: Callable[[float], float], xa: float, xb: float, xtol: float, rto
     if fcur == 0:
         return xcur, 0, True
     if _signbit(fpre) == _signbit(fcur):
-        raise ValueError("f(a) and f(b) must have different signs")
+        raise NoSignChange("f(a) and f(b) must have different signs")
     iterations = 0
     for _ in range(maxiter):
         iterations += 1

@@ -43,7 +43,7 @@ import numpy as np
 from clearance_contact import ONSET_RATE_FLOOR, ContactError
 
 from robot.integration import methods as registry
-from robot.integration.brent import brentq
+from robot.integration.brent import NoSignChange, brentq
 from robot.integration.events import HIDDEN, ONSET, OVER_BOUND, PEAK, all_finite, first_contact_time, hidden_contact, step_flags
 from robot.integration.force_peaks import ForcePeaks, derivative_or_inf
 from robot.integration.options import FailureLimits, SolverOptions
@@ -355,7 +355,7 @@ class EventDrivenIntegrator:
             rate = lambda tt: float(self.probe(tt, dense(tt), residual=False).penetration_rate[k])  # noqa: E731
             try:
                 t_peak = brentq(rate, t_old, t_to, xtol=1e-15, maxiter=200)
-            except ValueError:
+            except NoSignChange:  # the rate's sign change was not inside (t_old, t_to) after all
                 continue
             y_peak = self.system.normalise(dense(t_peak))
             pen_peak = self.probe(t_peak, y_peak, residual=False).penetration[k]

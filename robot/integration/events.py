@@ -19,7 +19,7 @@ import numpy as np
 
 from clearance_contact.compiled import jit
 
-from robot.integration.brent import brentq
+from robot.integration.brent import RTOL, brentq
 
 # what an accepted step needs beyond the routine checks (bit flags of step_flags)
 ONSET, HIDDEN, OVER_BOUND, PEAK = 1, 2, 4, 8
@@ -65,7 +65,7 @@ def first_contact_time(function: Callable[[float], float], a: float, b: float) -
         return a
     if fb <= 0:
         return b
-    return brentq(function, a, b, xtol=1e-15, rtol=4 * np.finfo(float).eps, maxiter=200)
+    return brentq(function, a, b, xtol=1e-15, rtol=RTOL, maxiter=200)
 
 
 def hidden_contact(penetration: Callable[[float], float], t_old: float, t_new: float, samples: int = HIDDEN_SAMPLES) -> float | None:

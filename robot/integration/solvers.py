@@ -51,10 +51,23 @@ from robot.integration.methods import FIXED_STEP_METHODS, JACOBIAN_METHODS, METH
 EPS = np.finfo(float).eps
 
 
-def _fixed_step(first_step) -> float:
+def _fixed_step(first_step, t0: float, t_bound: float) -> float:
+    """The step size of a fixed-step method; these integrate forward in time only."""
     if first_step is None or not first_step > 0:
         raise ValueError(f"fixed-step method needs first_step > 0 (the step size), got {first_step!r}")
+    if not t_bound >= t0:
+        raise ValueError(f"fixed-step methods integrate forward: t_bound={t_bound!r} must be >= t0={t0!r}")
     return float(first_step)
+
+
+def _step_size_setting(solver) -> float:
+    """The method's step size (scipy's ``OdeSolver`` gives the last step's; a fixed-step
+    method's is its setting, also before the first step and after a shortened last one:
+    the step loop restarts it with this size)."""
+    return solver.h_fixed
+
+
+_FIXED_STEP_SIZE = property(_step_size_setting)
 
 
 class FixedStepRK4(OdeSolver):
@@ -68,7 +81,7 @@ class FixedStepRK4(OdeSolver):
 
     def __init__(self, fun, t0, y0, t_bound, first_step=None, vectorized=False, **extraneous):
         super().__init__(fun, t0, y0, t_bound, vectorized)
-        self.h_fixed = _fixed_step(first_step)
+        self.h_fixed = _fixed_step(first_step, t0, t_bound)
         self.f = self.fun(self.t, self.y)
         self.y_old = None
         self.f_old = None
@@ -90,9 +103,7 @@ class FixedStepRK4(OdeSolver):
     def _dense_output_impl(self):
         return HermiteDense(self.t_old_value, self.t, self.y_old, self.f_old, self.y, self.f)
 
-    @property
-    def step_size(self):
-        return self.h_fixed
+    step_size = _FIXED_STEP_SIZE
 
 
 @dataclass(frozen=True)
@@ -152,7 +163,7 @@ class GeneralizedAlpha(OdeSolver):
             raise ValueError("the generalized-alpha method needs the second-order structure of the state (nq, nv, integrate)")
         if not 0.0 <= rho_inf <= 1.0:
             raise ValueError(f"rho_inf={rho_inf!r} must be in [0, 1]")
-        self.h_fixed = _fixed_step(first_step)
+        self.h_fixed = _fixed_step(first_step, t0, t_bound)
         self.structure = structure
         self.rtol, self.atol = float(rtol), float(atol)
         rho = float(rho_inf)
@@ -171,9 +182,7 @@ class GeneralizedAlpha(OdeSolver):
         self.newton_tol = max(10.0 * EPS / self.rtol, min(0.03, math.sqrt(self.rtol)))
         self.y_old = self.f_old = None
 
-    @property
-    def step_size(self):
-        return self.h_fixed
+    step_size = _FIXED_STEP_SIZE
 
     def _state(self, h: float, acc_new: np.ndarray, extra_rate: np.ndarray):
         """(q+, v+, extra+, x+) implied by a+."""

@@ -22,8 +22,8 @@ unique, ``qdd`` as the full one: the accelerations are those of the mechanism.
 Which spanning set is chosen does not change ``qdd``.
 
 **Detection** (:func:`detect`): rank-revealing QR with column pivoting
-(Businger-Golub, LAPACK ``geqp3``'s algorithm: :mod:`robot.model.pivoted_qr`) of
-the scaled closure rows' transpose. Each row is divided by the norm of the relative frame Jacobian of the vector it is a
+(Businger-Golub, LAPACK ``geqp3``) of the scaled closure rows' transpose. Each
+row is divided by the norm of the relative frame Jacobian of the vector it is a
 component of: ``||J_a^lin - J_b^lin||_F`` for the three translation rows of a
 closure, ``||J_a^ang - J_b^ang||_F`` for the two axis rows of a revolute closure
 (``LOCAL_WORLD_ALIGNED``), 1 for a driving row. These norms do not change when
@@ -75,7 +75,6 @@ import pinocchio as pin
 
 from robot.errors import RedundantConstraintWarning, SingularConfigurationError
 from robot.model import constraints as C
-from robot.model.pivoted_qr import pivoted_qr
 
 LWA = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
 
@@ -142,7 +141,9 @@ def independent_rows(scaled: np.ndarray, tolerance: float = REDUNDANCY_TOLERANCE
     nonzero = np.flatnonzero(np.linalg.norm(scaled, axis=1) > tolerance) if scaled.size else np.zeros(0, dtype=int)
     if nonzero.size == 0:
         return nonzero
-    triangle, pivots = pivoted_qr(scaled[nonzero].T)
+    from scipy.linalg import qr  # on first use (numba loads scipy.linalg in a compiled run anyway)
+
+    _, triangle, pivots = qr(scaled[nonzero].T, mode="economic", pivoting=True, check_finite=False)
     diagonal = np.abs(np.diag(triangle))
     rank = int(np.sum(diagonal > tolerance * diagonal[0]))
     return np.sort(nonzero[pivots[:rank]])

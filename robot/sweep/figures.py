@@ -5,11 +5,12 @@ dataset variables, ``select = {AXIS = VALUE}`` fixes the other axes, nearest
 value; unselected axes take their first value):
 
 * ``lines``: scalar variable(s) ``values = [...]`` against axis ``x``, one
-  curve per value of an optional second axis ``by``; ``x_scale``, ``y_scale``, ``x_label``;
+  curve per value of an optional second axis ``by``; ``x_scale``, ``y_scale``, ``x_label``, ``y_label``;
 * ``map``: a scalar ``value`` over axes ``x`` and ``y`` (grid designs; sampled
   designs draw the samples as coloured points), ``log_color``, ``x_scale`` /
   ``y_scale`` ("linear" or "log": cells centred on log-spaced values look equal),
-  ``x_label`` / ``y_label`` (default: the axis names; say the units);
+  ``x_label`` / ``y_label`` / ``value_label`` (default: the axis and variable names;
+  say the units);
 * ``bifurcation``: Poincare points ``points`` (an analysis's ``LABEL_points``),
   column ``component``, against axis ``x``;
 * ``waterfall``: spectra ``amplitude`` over ``frequency`` stacked along ``x``;
@@ -102,7 +103,7 @@ def draw_lines(dataset, figure: dict, out: Path):
             name = value if label is None else f"{value}, {label}"
             axes.plot(positions, curve.transpose(x).values, marker="o", markersize=3, label=name)
             traces.append({"type": "line", "x": data[x].values, "y": curve.values, "name": name})
-    axes.set(xlabel=figure.get("x_label", x), xscale=figure.get("x_scale", "linear"), yscale=figure.get("y_scale", "linear"))
+    axes.set(xlabel=figure.get("x_label", x), ylabel=figure.get("y_label", ""), xscale=figure.get("x_scale", "linear"), yscale=figure.get("y_scale", "linear"))
     if names is not None:
         axes.set_xticks(positions, names, rotation=20, fontsize=8)
     axes.legend(fontsize=7)
@@ -121,14 +122,14 @@ def draw_map(dataset, figure: dict, out: Path):
 
         values = dataset[value].values
         points = axes.scatter(dataset[x].values, dataset[y].values, c=values, norm=LogNorm() if log else None)
-        plot.colorbar(points, ax=axes, label=value)
+        plot.colorbar(points, ax=axes, label=figure.get("value_label", value))
         axes.set(xlabel=figure.get("x_label", x), ylabel=figure.get("y_label", y), xscale=figure.get("x_scale", "linear"), yscale=figure.get("y_scale", "linear"))
         return plot, [{"type": "scatter_map", "x": dataset[x].values, "y": dataset[y].values, "z": values, "name": value}]
     data = selected(dataset, figure, (x, y))
     z = data[value].transpose(y, x).values
     (x_positions, x_names), (y_positions, y_names) = _positions(data[x].values), _positions(data[y].values)
     plot = map_figure(
-        x_positions, y_positions, z, x_label=figure.get("x_label", x), y_label=figure.get("y_label", y), value_label=value,
+        x_positions, y_positions, z, x_label=figure.get("x_label", x), y_label=figure.get("y_label", y), value_label=figure.get("value_label", value),
         log_scale=log, x_scale=figure.get("x_scale", "linear") if x_names is None else "linear",
         y_scale=figure.get("y_scale", "linear") if y_names is None else "linear",
     )
@@ -212,8 +213,10 @@ def draw_sensitivity(dataset, figure: dict, out: Path):
 
 
 FIGURES: dict[str, FigureKind] = {
-    "lines": FigureKind(frozenset({"x", "values", "by", "x_scale", "y_scale", "x_label"}), frozenset({"x", "values"}), draw_lines),
-    "map": FigureKind(frozenset({"x", "y", "value", "log_color", "x_scale", "y_scale", "x_label", "y_label"}), frozenset({"x", "y", "value"}), draw_map),
+    "lines": FigureKind(frozenset({"x", "values", "by", "x_scale", "y_scale", "x_label", "y_label"}), frozenset({"x", "values"}), draw_lines),
+    "map": FigureKind(
+        frozenset({"x", "y", "value", "log_color", "x_scale", "y_scale", "x_label", "y_label", "value_label"}), frozenset({"x", "y", "value"}), draw_map
+    ),
     "bifurcation": FigureKind(frozenset({"x", "points", "component"}), frozenset({"x", "points"}), draw_bifurcation, grid_only=True),
     "waterfall": FigureKind(frozenset({"x", "frequency", "amplitude"}), frozenset({"x", "frequency", "amplitude"}), draw_waterfall, grid_only=True),
     "orbit": FigureKind(frozenset({"x", "array", "clearance", "panels"}), frozenset({"x", "array", "clearance"}), draw_orbit, grid_only=True),
@@ -229,6 +232,25 @@ def output_names(spec) -> set[str]:
     names = {f"{a.label}_{f.name}" for a in spec.analyses for f in ANALYSES[a.name].outputs}
     names |= {s.name for s in spec.keep.arrays} if spec.keep else set()
     return names | set(COUNTS) | set(TIMING) | {"status", "t_reached"}
+
+
+def _check_scales(spec, name: str, figure: dict) -> None:
+    """``x_scale``/``y_scale``: one of the scales, and "log" only on an axis of positive numbers."""
+    from robot.analysis.figures import AXIS_SCALES
+
+    for key, axis_key in (("x_scale", "x"), ("y_scale", "y")):
+        if key not in figure:
+            continue
+        if figure[key] not in AXIS_SCALES:
+            raise SweepError(f"figure {name!r}: {key} must be one of {AXIS_SCALES}, got {figure[key]!r}", key=f"figure.{key}", value=figure[key])
+        axis = next((a for a in spec.axes if a.name == figure.get(axis_key)), None)
+        values = () if axis is None else (axis.values or (axis.low, axis.high))  # a sampled axis: its range
+        numeric = bool(values) and all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in values)
+        if figure[key] == "log" and not (numeric and min(values) > 0):
+            raise SweepError(
+                f"figure {name!r}: {key}='log' needs an axis {axis_key} of positive numbers; {figure.get(axis_key)!r} has "
+                f"{', '.join(map(str, values)) or 'no values'}", key=f"figure.{key}", value=figure[key],
+            )
 
 
 def check_figures(spec) -> None:
@@ -257,9 +279,7 @@ def check_figures(spec) -> None:
             axis = next(a for a in spec.axes if a.name == figure["x"])
             if figure["reference"] not in axis.values:
                 raise SweepError(f"figure {name!r}: reference={figure['reference']!r} is not a value of axis {axis.name!r} ({', '.join(map(str, axis.values))})", key="figure.reference", value=figure["reference"])
-        for key in ("x_scale", "y_scale"):
-            if key in figure and figure[key] not in ("linear", "log"):
-                raise SweepError(f"figure {name!r}: {key} must be 'linear' or 'log', got {figure[key]!r}", key=f"figure.{key}", value=figure[key])
+        _check_scales(spec, name, figure)
         for value in figure.get("values", []):
             if value not in variables:
                 raise SweepError(f"figure {name!r}: values has {value!r}, not a variable of this sweep", key="figure.values", value=value)
