@@ -139,3 +139,11 @@ def test_grid_keys_follow_the_resolved_scene(tmp_path):
     assert spec.run_keys[1:] == same.run_keys[1:] or spec.run_keys == same.run_keys
     changed = load_sweep(_file(tmp_path, axis="values = [1e-5, 1e-4, 1e-3]", extra='\n[overrides]\n"solver.rtol" = 1e-6\n'))
     assert set(changed.run_keys).isdisjoint(spec.run_keys)
+
+
+@pytest.mark.parametrize("path", sorted((Path(__file__).resolve().parents[1] / "robot" / "sweep" / "examples").glob("*.toml")), ids=lambda p: p.stem)
+def test_every_shipped_sweep_file_loads(path):
+    """The shipped studies stay valid as the scene schema, the analyses and the figures evolve:
+    every axis value is accepted by the scene, every figure names known axes and variables."""
+    spec = load_sweep(path)
+    assert len(spec.scenes) == len(spec.run_keys) == len(set(spec.run_keys)) > 0

@@ -235,7 +235,8 @@ def output_names(spec) -> set[str]:
 
 
 def _check_scales(spec, name: str, figure: dict) -> None:
-    """``x_scale``/``y_scale``: one of the scales, and "log" only on an axis of positive numbers."""
+    """``x_scale``/``y_scale``: one of the scales, and "log" only on an axis of positive numbers
+    (a ``lines`` figure's y is its values, not an axis: left to the data)."""
     from robot.analysis.figures import AXIS_SCALES
 
     for key, axis_key in (("x_scale", "x"), ("y_scale", "y")):
@@ -243,6 +244,8 @@ def _check_scales(spec, name: str, figure: dict) -> None:
             continue
         if figure[key] not in AXIS_SCALES:
             raise SweepError(f"figure {name!r}: {key} must be one of {AXIS_SCALES}, got {figure[key]!r}", key=f"figure.{key}", value=figure[key])
+        if axis_key not in figure:
+            continue
         axis = next((a for a in spec.axes if a.name == figure.get(axis_key)), None)
         values = () if axis is None else (axis.values or (axis.low, axis.high))  # a sampled axis: its range
         numeric = bool(values) and all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in values)
