@@ -147,3 +147,22 @@ def test_every_shipped_sweep_file_loads(path):
     every axis value is accepted by the scene, every figure names known axes and variables."""
     spec = load_sweep(path)
     assert len(spec.scenes) == len(spec.run_keys) == len(set(spec.run_keys)) > 0
+
+
+def test_a_store_of_an_older_analysis_version_is_another_layout(tmp_path, monkeypatch):
+    """An analysis that gains an output (as lyapunov_benettin gained standard_error) makes the old
+    store another layout: resuming into it would ask for a variable it lacks. Same file, same scenes."""
+    import dataclasses
+
+    from robot.analysis import ANALYSES
+    from robot.analysis.registry import Field
+
+    extra = '\n[[analysis]]\nname = "peak_rms"\nsignal = "S1_normal_force:sum"\n'
+    path = _file(tmp_path, extra=extra)
+    before = load_sweep(path)
+    before_key = before.layout_key  # (computed on first access)
+    newer = dataclasses.replace(ANALYSES["peak_rms"], outputs=(*ANALYSES["peak_rms"].outputs, Field("kurtosis", (), "1", "a new output")))
+    monkeypatch.setitem(ANALYSES._analyses, "peak_rms", newer)
+    after = load_sweep(path)
+    assert after.run_keys == before.run_keys  # the runs are the same ...
+    assert after.layout_key != before_key  # ... the store's variables are not

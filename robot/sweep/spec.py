@@ -130,9 +130,16 @@ class SweepSpec:
 
     @cached_property
     def layout_key(self) -> str:
-        """Hash of what fixes the store's shape: dimensions, coordinates, outputs."""
+        """Hash of what fixes the store's shape: dimensions, coordinates, outputs, and the output fields
+        each analysis declares (a newer version of an analysis may add one: its old store is another layout)."""
+        from robot.analysis import ANALYSES
+
         coords = {name: [dims, np.asarray(values).tolist()] for name, (dims, values) in self.design.coords.items()}
-        return digest({"dims": self.design.dims, "shape": self.design.shape, "coords": coords, "axes": [a.key if not a.linked else list(a.keys) for a in self.axes], "outputs": self.outputs_canonical()})
+        fields = {a.name: [[f.name, list(f.dims)] for f in ANALYSES[a.name].outputs] for a in self.analyses}
+        return digest({
+            "dims": self.design.dims, "shape": self.design.shape, "coords": coords,
+            "axes": [a.key if not a.linked else list(a.keys) for a in self.axes], "outputs": self.outputs_canonical(), "fields": fields,
+        })  # fmt: skip
 
 
 def digest(value: Any) -> str:
