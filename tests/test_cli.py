@@ -7,6 +7,7 @@ ideal scene over a few milliseconds.
 from __future__ import annotations
 
 import importlib
+import json
 import os
 import signal
 import stat
@@ -294,3 +295,20 @@ def test_an_interrupted_write_leaves_no_temporary_file(tmp_path):
     with pytest.raises(KeyboardInterrupt):
         atomic_write(tmp_path / "a.bin", write)
     assert list(tmp_path.iterdir()) == []
+
+
+def test_bench_times_every_radial_law_and_dissipation_model(capsys, tmp_path):
+    """`clearance bench` (= scripts/bench_contact.py): a JSON row per radial law and per dissipation model,
+    each a positive time in microseconds (a smoke test of the benchmark, not a timed test)."""
+    from clearance_contact.dissipation import DISSIPATION_MODELS
+    from clearance_contact.radial_laws import RADIAL_LAWS
+
+    out = tmp_path / "bench.json"
+    code, printed, _ = run_cli(capsys, "bench", "--repeats", "7", "--number", "5", "--out", str(out))
+    assert code == 0
+    report = json.loads(out.read_text())
+    assert report["unit"] == "microseconds per call"
+    for name in [*RADIAL_LAWS, *DISSIPATION_MODELS]:
+        case = report["cases"][f"revolute_skew_in_contact_{name}"]
+        assert case["median_us"] > 0 and case["kernel"]["median_us"] > 0
+        assert f"revolute_skew_in_contact_{name}" in printed

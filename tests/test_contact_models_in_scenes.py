@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -106,6 +107,23 @@ def test_scene_chooses_the_models(tmp_path) -> None:
             if clearance.kind == "revolute":
                 assert clearance.law.radial_law.name == "linear"
     assert dissipation_factor("flores", 1.0) == 0.0
+
+
+def test_every_shipped_scene_names_its_contact_models() -> None:
+    """Issue 14: the shipped scenes say which models they use (and why, in their comments): every
+    clearance joint names its dissipation model, every revolute one its radial law, in the file itself."""
+    import tomllib
+
+    from robot.scene.loader import SCENE_DIR
+
+    checked = 0
+    for path in sorted(Path(SCENE_DIR).glob("*.toml")):
+        for clearance in tomllib.loads(path.read_text()).get("clearance", []):
+            assert "dissipation" in clearance, f"{path.name}: clearance {clearance['joint']!r} does not name its dissipation model"
+            if clearance["type"] == "revolute":
+                assert "radial_law" in clearance, f"{path.name}: clearance {clearance['joint']!r} does not name its radial law"
+            checked += 1
+    assert checked >= 7
 
 
 @pytest.mark.parametrize(

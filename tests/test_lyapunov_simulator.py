@@ -172,6 +172,20 @@ def test_periodic_pendulum_exponent_is_half_the_damping_trace(tmp_path):
     assert result.exponent / OMEGA_0 == pytest.approx(-1.0 / (2.0 * q), abs=math.log(3.0) / (15 * period * OMEGA_0))
 
 
+def test_conservative_periodic_pendulum_exponent_is_about_zero(tmp_path):
+    """An undamped, undriven pendulum swinging at 0.2 rad (a periodic orbit of a conservative system):
+    no exponential divergence, only the shear of the amplitude-dependent period (a separation grows
+    linearly), so the estimate goes to zero with the horizon: below 0.01 omega_0 over 40 swings
+    (measured -0.0014) and smaller than over 10 (-0.0022)."""
+    flow = SimulatorFlow(build_run(pendulum_scene(tmp_path, q=math.inf, g=0.0)))
+    swing = 2.0 * math.pi / OMEGA_0  # small-amplitude period
+    estimates = [
+        benettin_exponent(flow, flow.state([THETA_0, 0.0], 0.0), renormalisation_time=swing, n_intervals=n, separation=1e-7, n_alignment=2).exponent / OMEGA_0
+        for n in (10, 40)
+    ]
+    assert abs(estimates[1]) < 0.01 and abs(estimates[1]) < abs(estimates[0]), estimates
+
+
 def free_four_bar(directory: Path, stiffness: float, crank_damping: float, rocker_damping: float) -> Path:
     path = directory / "four_bar.toml"
     path.write_text(

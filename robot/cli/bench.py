@@ -106,7 +106,9 @@ def revolute_cases(repeats: int, number: int) -> dict:
         return {"revolute": {"skipped": f"RevoluteClearanceJoint not importable: {exc}"}}
     from clearance_contact.radial_laws import RADIAL_LAWS
 
-    def joint_with(law: str) -> RevoluteClearanceJoint:
+    from clearance_contact.dissipation import DISSIPATION_MODELS
+
+    def joint_with(law: str, dissipation: str = "lankarani_nikravesh") -> RevoluteClearanceJoint:
         return RevoluteClearanceJoint(
             journal_radius=0.010,
             bearing_inner_radius=0.0101,
@@ -118,6 +120,7 @@ def revolute_cases(repeats: int, number: int) -> dict:
             restitution=0.9,
             friction=FRICTION,
             radial_law=law,
+            dissipation=dissipation,
         )
 
     joint = joint_with("linear")
@@ -136,8 +139,10 @@ def revolute_cases(repeats: int, number: int) -> dict:
         "revolute_out_of_contact": _case(joint, (np.eye(3), *common), repeats, number),
         "revolute_penetration": _penetration_case(joint, _rot_x(tilt), pos, np.eye(3), pos, repeats, number),
     }
-    for law in RADIAL_LAWS:  # every radial law, skew-tilted contact (the dissipation models share one code path)
+    for law in RADIAL_LAWS:  # every radial law, skew-tilted contact
         cases[f"revolute_skew_in_contact_{law}"] = _case(joint_with(law), skew, repeats, number)
+    for model in DISSIPATION_MODELS:  # every dissipation model, same contact, linear law
+        cases[f"revolute_skew_in_contact_{model}"] = _case(joint_with("linear", model), skew, repeats, number)
     return cases
 
 
@@ -167,6 +172,12 @@ def execute(args: argparse.Namespace) -> int:
     if args.repeats < 7:
         raise UsageError(f"--repeats={args.repeats} must be >= 7")
     writable_file(args.out, "--out")
+    if not JIT_ENABLED:  # the numbers would be plain Python's, 20-40 x the compiled ones: say so first
+        print(
+            "warning: the contact kernels are NOT compiled (numba missing or CLEARANCE_CONTACT_JIT=0): these are "
+            "plain-Python times; install numba (pip install numba) for the compiled ones",
+            file=sys.stderr,
+        )
     cases = spherical_cases(args.repeats, args.number) | revolute_cases(args.repeats, args.number)
     plain = plain_python_cases(args.repeats, max(args.number // 50, 10)) if args.plain else None
     try:
@@ -189,12 +200,12 @@ def execute(args: argparse.Namespace) -> int:
     if plain is not None:
         report["plain_python_cases"] = plain
     atomic_write_text(args.out, json.dumps(report, indent=2) + "\n")
-    print(f"{'case':38s} {'evaluate':>10s} {'kernel':>10s}" + (f" {'plain eval':>11s} {'plain kern':>11s}" if plain else ""))
+    print(f"{'case':46s} {'evaluate':>10s} {'kernel':>10s}" + (f" {'plain eval':>11s} {'plain kern':>11s}" if plain else ""))
     for name, case in cases.items():
         if "median_us" not in case:
-            print(f"{name:38s} {case}")
+            print(f"{name:46s} {case}")
             continue
-        line = f"{name:38s} {case['median_us']:8.2f}us {case['kernel']['median_us']:8.2f}us"
+        line = f"{name:46s} {case['median_us']:8.2f}us {case['kernel']['median_us']:8.2f}us"
         if plain:
             line += f" {plain[name]['median_us']:9.2f}us {plain[name]['kernel']['median_us']:9.2f}us"
         print(line)
