@@ -185,8 +185,12 @@ def test_failed_run_is_recorded_and_the_sweep_finishes(scheduler, tmp_path, caps
     )
     sweep = _write(tmp_path, text)
     out = tmp_path / "out"
-    assert main([str(sweep), "--scheduler", scheduler, "--out", str(out)]) == 1
-    assert "1 failed: 1 penetration beyond physical bound" in capsys.readouterr().out
+    assert main([str(sweep), "--scheduler", scheduler, "--out", str(out), "--progress"]) == 1
+    captured = capsys.readouterr()
+    assert "1 failed: 1 penetration beyond physical bound" in captured.out
+    # the progress bar: runs done of the total, the failures so far, the time left
+    final = captured.err.replace("\r", "\n").strip().splitlines()[-1]
+    assert "sweep" in final and "2/2" in final and "failed=1" in final and "<" in final, final
     dataset = open_sweep(out / "sweep.zarr").load().isel(clearance=0)
     assert dataset.done.all()
     ok, failed = dataset.sel(penetration_ratio=0.5), dataset.sel(penetration_ratio=1e-3)
