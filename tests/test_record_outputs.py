@@ -61,7 +61,8 @@ def test_compiled_outputs_equal_the_reference_evaluation(case):
     if dynamics.contacts:
         # the comparison means something only if the run has impacts
         assert np.any(trajectory.kind == RECORD_ONSET)
-        assert max(np.max(reference[f"{c.site.name}_normal_force"]) for c in dynamics.contacts) > 1.0
+        # every clearance joint of every case peaks at 395 N (four-bar) to 15 kN: above 100 N
+        assert min(np.max(reference[f"{c.site.name}_normal_force"]) for c in dynamics.contacts) > 100.0
     if dynamics.forces is not None:
         assert np.max(np.abs(reference["force_energy"])) > 0.0
     for key, expected in reference.items():
