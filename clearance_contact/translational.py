@@ -97,7 +97,7 @@ o_s +- (L_s/2) R_s e_z (front, rear) in the guide frame: x, y = transverse offse
 Kernel (``docs/contact-api.md``)
 --------------------------------
 :func:`translational_kernel`, numba-compiled through :data:`~clearance_contact.compiled.jit`
-(``KERNEL_ID = None``: the simulator calls :meth:`ClearanceJoint.evaluate`).
+(``KERNEL_ID = 2``: the simulator's compiled dispatcher calls it directly).
 ``kernel_parameters`` (float64)::
 
     [K, n, c_e, friction code, 5 friction parameters, dissipation code, 2 parameters,
@@ -410,6 +410,7 @@ class _SliderInGuide(ClearanceJoint):
     N_ECCENTRICITY = _N_ECCENTRICITY
     SITE_KINDS = ("prismatic",)
     PLANAR = False
+    KERNEL_ID = 2
 
     def _build(
         self,

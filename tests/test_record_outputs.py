@@ -30,6 +30,7 @@ CASES = {
     # another mechanism with a revolute clearance joint, and one with force elements
     "slider-crank, revolute clearance": ("slider_crank_revolute", {}, 0.05),
     "four-bar, revolute clearance": ("four_bar_revolute", {}, 0.05),
+    "slider-crank, translational clearance": ("slider_crank_translational", {}, 0.1),
     "force elements": ("free_two_link_spring", {}, 0.05),
     # revolute closures: redundant rows, the KKT solve on the independent ones
     "four-bar, ideal": ("four_bar", {}, 0.05),

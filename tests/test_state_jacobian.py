@@ -66,7 +66,7 @@ def scene_states(scene_runs):
     return get
 
 
-#: (scene, state) of the stiff-block checks: the 4-UPS/RPS, and revolute closures with a revolute
+#: (scene, state) of the stiff-block checks: the 4-UPS/RPS, revolute closures with a revolute
 #: clearance joint (the slider-crank's rod, the four-bar's rocker floating on it: the closure's axis rows
 #: are not identically zero)
 STIFF_CASES = [
@@ -74,6 +74,8 @@ STIFF_CASES = [
     ("compound_misaligned", "all joints in contact"),
     ("slider_crank_rod_clearance", "all joints in contact"),
     ("four_bar_rocker_clearance", "all joints in contact"),
+    # a translational clearance joint (slider in its guide, corners of a planar slider-crank)
+    ("slider_crank_translational", "all joints in contact"),
 ]
 
 

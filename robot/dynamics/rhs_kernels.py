@@ -44,6 +44,7 @@ import pinocchio as pin
 from clearance_contact.compiled import JIT_ENABLED, drop_stale_caches, jit
 from clearance_contact.revolute import RevoluteClearanceJoint, revolute_kernel
 from clearance_contact.spherical import SphericalClearanceJoint, spherical_kernel
+from clearance_contact.translational import TranslationalClearanceJoint, translational_kernel
 
 if JIT_ENABLED:
     # this package's compiled code calls clearance_contact's law kernels (see drop_stale_caches)
@@ -320,7 +321,8 @@ def power_series(coefficients, x, out):
 #: by an integer inside compiled code. A type without a branch in law_kernel (KERNEL_ID None, e.g.
 #: defined outside clearance_contact) is evaluated through its ``evaluate``.
 SPHERICAL_LAW, REVOLUTE_LAW = SphericalClearanceJoint.KERNEL_ID, RevoluteClearanceJoint.KERNEL_ID
-LAW_IDS = {SphericalClearanceJoint.kernel: SPHERICAL_LAW, RevoluteClearanceJoint.kernel: REVOLUTE_LAW}
+TRANSLATIONAL_LAW = TranslationalClearanceJoint.KERNEL_ID  # spatial and planar: the kernel reads its corner count
+LAW_IDS = {SphericalClearanceJoint.kernel: SPHERICAL_LAW, RevoluteClearanceJoint.kernel: REVOLUTE_LAW, TranslationalClearanceJoint.kernel: TRANSLATIONAL_LAW}
 
 
 #: status of :func:`law_kernel` for a law id it does not know (nothing written)
@@ -334,6 +336,8 @@ def law_kernel(law_id, parameters, outer_rotation, outer_position, outer_twist, 
         return spherical_kernel(parameters, outer_rotation, outer_position, outer_twist, inner_rotation, inner_position, inner_twist, onset, out)
     if law_id == REVOLUTE_LAW:
         return revolute_kernel(parameters, outer_rotation, outer_position, outer_twist, inner_rotation, inner_position, inner_twist, onset, out)
+    if law_id == TRANSLATIONAL_LAW:
+        return translational_kernel(parameters, outer_rotation, outer_position, outer_twist, inner_rotation, inner_position, inner_twist, onset, out)
     return STATUS_UNKNOWN_LAW
 
 
