@@ -158,3 +158,17 @@ def test_simulate_summarises_a_failed_run(misaligned):
     outcome = simulate(misaligned, SolverOptions("RK4", first_step=2e-4), 0.02)
     assert not outcome.success and outcome.cause
     assert np.isfinite(outcome.max_residual) and outcome.peaks
+
+
+def test_energy_error_closes_with_force_elements():
+    """The studies' energy balance includes the force elements' work: on the two-link arm with springs
+    (and a torque element) it closes to the integration error, not to the springs' energy swing."""
+    import robot
+
+    run = build_run("free_two_link_spring")
+    options = dataclasses.replace(run.scene.solver, method="DOP853", rtol=1e-10, atol=1e-12)
+    outcome = simulate(run, options, 0.5)
+    assert outcome.status == 0
+    swing = np.ptp(robot.simulate(run.scene, t_end=0.5)["force_energy"])
+    assert swing > 0.1  # the springs exchange energy: leaving their work out would show
+    assert outcome.energy_error < 1e-6 * swing

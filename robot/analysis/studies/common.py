@@ -44,7 +44,7 @@ class Outcome:
     n_hidden_contacts: int
     max_onset_overshoot: float
     max_residual: float = math.nan
-    energy_error: float = math.nan  # max |Delta(T + V) - W_act - W_contact| (J)
+    energy_error: float = math.nan  # max |Delta(T + V) - W_act - W_contact - W_force| (J)
     actuator_work_scale: float = math.nan  # max |W_act| (J), to make energy_error relative
     peaks: dict = field(default_factory=dict)  # joint -> peak normal force (N) over the run
     impulses: dict = field(default_factory=dict)  # joint -> integral of the normal forces (N s)
@@ -134,7 +134,10 @@ def simulate(
     t = result["t"]
     outcome.max_residual = float(np.max(result["constraint_residual"]))
     energy = result["kinetic_energy"] + result["potential_energy"]
-    balance = (energy - energy[0]) - (result["actuator_work"] + result["contact_work"])
+    work = result["actuator_work"] + result["contact_work"]
+    if "force_work" in result.keys():  # force elements: their work (springs' included, = -their energy change)
+        work = work + result["force_work"]
+    balance = (energy - energy[0]) - work
     outcome.energy_error = float(np.max(np.abs(balance)))
     outcome.actuator_work_scale = float(np.max(np.abs(result["actuator_work"])))
     for joint in result.clearance_joints or [c.site.name for c in dynamics.contacts]:
