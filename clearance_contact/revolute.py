@@ -1014,7 +1014,6 @@ class RevoluteClearanceJoint(ClearanceJoint):
         "_k_line",
         "_k_plane",
         "_k_point",
-        "_frictionless",
         "_radial_law",
         "_dissipation",
         "_plane_density",
@@ -1104,7 +1103,6 @@ class RevoluteClearanceJoint(ClearanceJoint):
         self._k_point = k_point
         self._plane_density = k_plane / (math.pi * (r_b2 * r_b2 - r_b1 * r_b1))
         self._disc_rule = _disc_rule(_QUAD_POINTS, n_a)
-        self._frictionless = isinstance(friction, NoFriction)
         self.kernel_parameters = self._pack(code, friction_parameters)
 
 

@@ -47,7 +47,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 import weakref
-from typing import Callable, NamedTuple, Protocol, Sequence
+from typing import Callable, NamedTuple, Protocol
 
 import numpy as np
 import pinocchio as pin
@@ -847,9 +847,3 @@ def energy(dynamics: DynamicsModel, workspace: DynamicsWorkspace, q: np.ndarray,
     model, data = dynamics.mechanism.model, workspace.data
     return float(pin.computeKineticEnergy(model, data, q, v)), float(pin.computePotentialEnergy(model, data, q))
 
-
-def stack_candidates(contacts: Sequence, attribute: str) -> np.ndarray:
-    """Concatenate one per-candidate attribute over the contact sites."""
-    if not contacts:
-        return np.zeros(0)
-    return np.concatenate([np.atleast_1d(getattr(c, attribute)) for c in contacts])

@@ -94,8 +94,6 @@ class _Library:
             (cvode, "CVodeGetDky"): (ctypes.c_int, [_pointer, _real, ctypes.c_int, _pointer]),
             (cvode, "CVodeGetNumRhsEvals"): (ctypes.c_int, [_pointer, ctypes.POINTER(ctypes.c_long)]),
             (cvode, "CVodeGetNumJacEvals"): (ctypes.c_int, [_pointer, ctypes.POINTER(ctypes.c_long)]),
-            (cvode, "CVodeGetNumErrTestFails"): (ctypes.c_int, [_pointer, ctypes.POINTER(ctypes.c_long)]),
-            (cvode, "CVodeGetLastStep"): (ctypes.c_int, [_pointer, ctypes.POINTER(_real)]),
             (cvode, "CVodeFree"): (None, [ctypes.POINTER(_pointer)]),
         }
         for (library, name), (result, arguments) in signatures.items():
@@ -201,7 +199,6 @@ class DirectCVODE:
         self.t = float(t0)
         self._t_return = _real()
         self._count = ctypes.c_long()
-        self._step = _real()
 
     # --- callbacks (from C: never raise) -------------------------------------------------------
     def _view(self, vector) -> np.ndarray:
@@ -258,15 +255,6 @@ class DirectCVODE:
     @property
     def n_jacobians(self) -> int:
         return self._counter(self._lib.CVodeGetNumJacEvals)
-
-    @property
-    def n_error_test_failures(self) -> int:
-        return self._counter(self._lib.CVodeGetNumErrTestFails)
-
-    @property
-    def last_step(self) -> float:
-        self._lib.CVodeGetLastStep(self._memory, ctypes.byref(self._step))
-        return self._step.value
 
     @staticmethod
     def message(flag: int) -> str:

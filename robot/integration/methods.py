@@ -153,8 +153,6 @@ JACOBIAN_METHODS: Mapping[str, bool] = TraitView(lambda t: True, lambda t: t.tak
 STRUCTURED_METHODS: Mapping[str, bool] = TraitView(lambda t: True, lambda t: t.second_order_structure)
 #: right-hand-side calls per attempted step (explicit Runge-Kutta, FSAL)
 STAGES: Mapping[str, int] = TraitView(lambda t: t.stages, lambda t: t.stages is not None)
-#: methods whose step is replayed exactly by the force-peak search
-REPLAYABLE: Mapping[str, bool] = TraitView(lambda t: True, lambda t: t.replayable)
 #: default step sizes of the work-precision sweep (fixed-step methods)
 STEP_SIZES: Mapping[str, tuple[float, ...]] = TraitView(lambda t: t.step_sizes, lambda t: bool(t.step_sizes))
 

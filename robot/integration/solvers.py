@@ -97,7 +97,6 @@ class FixedStepRK4(OdeSolver):
         self.y = y + h / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
         self.t = t + h
         self.f = self.fun(self.t, self.y)
-        self.h_previous = h
         return True, None
 
     def _dense_output_impl(self):

@@ -51,10 +51,6 @@ class FigureKind:
     grid_only: bool = False
 
 
-def _axis_value(dataset, axis: str):
-    return dataset[axis].values
-
-
 def selected(dataset, figure: dict, keep: tuple[str, ...]):
     """The dataset with every run dimension other than ``keep`` fixed (``select`` or the first value)."""
     from robot.sweep.design import SAMPLE_DIM

@@ -57,10 +57,8 @@ from clearance_contact import STEEL, ClearanceJoint, ContactError, NoFriction, S
 from robot.io.atomic import atomic_write
 from robot.errors import ResultFileError, RobotError
 from robot.model.mechanism import Mechanism, build_mechanism, rotation_z_to
-from robot.data import shipped_urdf, shipped_urdf_dir
+from robot.data import shipped_urdf
 from robot.io.results import SimulationResult, load_result, mechanism_fingerprint
-
-URDF_DIR = shipped_urdf_dir()
 
 OUTER_COLOR = 0x7FA7D0
 INNER_COLOR = 0xE0A020
