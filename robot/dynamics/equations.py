@@ -55,6 +55,7 @@ import pinocchio as pin
 from clearance_contact import ContactError, SphericalClearanceJoint
 
 from robot.dynamics.baumgarte import Baumgarte
+from robot.dynamics.probe import Probe
 from robot.model import constraints as C
 from robot.model import redundancy as R
 from robot.dynamics import rhs_kernels as K
@@ -716,15 +717,6 @@ def _raise_contact_error(dynamics: DynamicsModel, workspace: DynamicsWorkspace, 
     views = workspace.sites[index]
     views.law.evaluate(views.outer_rotation, views.outer_position, twists[0], views.inner_rotation, views.inner_position, twists[1], onset)
     raise ContactError(f"contact law of {dynamics.contacts[index].site.name!r} failed (status {status}) at t={t!r}")
-
-
-class Probe(NamedTuple):
-    """What :func:`contact_probe` measures at one state (per contact candidate, and the constraints)."""
-
-    penetration: np.ndarray
-    penetration_rate: np.ndarray
-    residual: float  # max |Phi|
-    normal_force: np.ndarray
 
 
 def contact_probe(

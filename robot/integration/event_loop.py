@@ -42,6 +42,7 @@ import numpy as np
 
 from clearance_contact import ONSET_RATE_FLOOR, ContactError
 
+from robot.dynamics.probe import Probe as ContactProbe  # the step loop's name for it (robot.validation imports it)
 from robot.integration import methods as registry
 from robot.integration.brent import NoSignChange, brentq
 from robot.integration.events import HIDDEN, ONSET, OVER_BOUND, PEAK, all_finite, first_contact_time, hidden_contact, step_flags
@@ -54,15 +55,6 @@ from robot.integration.solvers import SecondOrderStructure, make_solver
 #: restarts at one instant before the run is declared failed (contact events that make no progress)
 MAX_STALLED_RESTARTS = 20
 _NONE = np.zeros(0, dtype=np.intp)
-
-
-class ContactProbe(NamedTuple):
-    """Per contact candidate at one state: penetration (m), its rate (m/s), normal force (N); and max |Phi|."""
-
-    penetration: np.ndarray
-    penetration_rate: np.ndarray
-    residual: float  # constraint residual checked against FailureLimits.max_residual (NaN: not checked)
-    normal_force: np.ndarray
 
 
 class EventSystem(Protocol):
