@@ -15,7 +15,7 @@ import pytest
 from robot.integration import cvode_direct
 from robot.integration import solvers as S
 
-pytestmark = pytest.mark.skipif(not cvode_direct.available() or S.scikit_sundae_cvode() is None, reason="SUNDIALS libraries of scikit-sundae not found")
+pytestmark = pytest.mark.skipif(not cvode_direct.available() or cvode_direct.scikit_sundae_cvode() is None, reason="SUNDIALS libraries of scikit-sundae not found")
 
 # Robertson's chemical kinetics: the classic stiff test (rates 0.04, 1e4, 3e7)
 def robertson(t, y):

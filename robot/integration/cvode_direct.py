@@ -24,6 +24,7 @@ callback failure) and is raised again from :meth:`DirectCVODE.one_step`.
 from __future__ import annotations
 
 import ctypes
+import functools
 import importlib.util
 from pathlib import Path
 from typing import Callable
@@ -123,6 +124,21 @@ def _library() -> _Library | None:
 def available() -> bool:
     """Whether :class:`DirectCVODE` can run here (the libraries were found and loaded)."""
     return _library() is not None
+
+
+@functools.cache
+def scikit_sundae_cvode() -> type | None:
+    """scikit-sundae's ``CVODE`` binding class, or None without the package.
+
+    Imported on first use only, where the direct C interface is not available:
+    importing ``sksundae`` imports ``scipy.sparse`` and ``scipy.optimize``
+    (0.3-0.6 s), which a run through :class:`DirectCVODE` never uses.
+    """
+    try:  # SUNDIALS CVODE through scikit-sundae (a dependency; guarded so the rest works without it)
+        from sksundae.cvode import CVODE
+    except ImportError:  # pragma: no cover - depends on the environment
+        return None
+    return CVODE
 
 
 class CVODEError(RuntimeError):

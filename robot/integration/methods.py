@@ -134,13 +134,7 @@ def _cvode_importable() -> bool:
     """
     from robot.integration import cvode_direct  # ctypes and numpy only
 
-    if cvode_direct.available():
-        return True
-    try:  # SUNDIALS CVODE through scikit-sundae (a dependency; guarded so the rest works without it)
-        importlib.import_module("sksundae.cvode")
-    except ImportError:  # pragma: no cover - depends on the environment
-        return False
-    return True
+    return cvode_direct.available() or cvode_direct.scikit_sundae_cvode() is not None
 
 
 #: method name -> solver class (the methods on offer)

@@ -34,7 +34,6 @@ not expose it (reported as -1).
 
 from __future__ import annotations
 
-import functools
 import math
 from dataclasses import dataclass
 from typing import Callable
@@ -307,21 +306,6 @@ class Newmark(GeneralizedAlpha):
         super().__init__(*args, **kwargs)
 
 
-@functools.cache
-def scikit_sundae_cvode() -> type | None:
-    """scikit-sundae's ``CVODE`` binding class, or None without the package.
-
-    Imported on first use only, where the direct C interface is not available:
-    importing ``sksundae`` imports ``scipy.sparse`` and ``scipy.optimize``
-    (0.3-0.6 s), which a run through :mod:`robot.integration.cvode_direct` never uses.
-    """
-    try:  # SUNDIALS CVODE through scikit-sundae (a dependency; guarded so the rest works without it)
-        from sksundae.cvode import CVODE
-    except ImportError:  # pragma: no cover - depends on the environment
-        return None
-    return CVODE
-
-
 class _CVODEDense(DenseOutput):
     """CVODE's own interpolant of the last step (``CVodeGetDky``; through ``step(t)`` with scikit-sundae's binding)."""
 
@@ -361,7 +345,7 @@ class _CVODEBase(OdeSolver):
 
     def __init__(self, fun, t0, y0, t_bound, rtol=1e-3, atol=1e-6, max_step=np.inf, first_step=None, vectorized=False, jac=None, **extraneous):
         direct = cvode_direct.available()
-        binding = None if direct else scikit_sundae_cvode()
+        binding = None if direct else cvode_direct.scikit_sundae_cvode()
         if not direct and binding is None:
             raise ValueError("CVODE needs the scikit-sundae package (pip install scikit-sundae)")
         super().__init__(fun, t0, y0, t_bound, vectorized)
