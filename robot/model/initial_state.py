@@ -45,7 +45,7 @@ import pinocchio as pin
 from robot.scene.loader import CLEARANCE_STATES  # the scene schema's choices
 from robot.errors import InitialStateError, InitialStateWarning, UnreachablePoseError
 from robot.model import constraints as C
-from robot.model.kinematics import RANK_TOLERANCE, HeldCoordinates, assemble, update_kinematics, velocity_analysis
+from robot.model.kinematics import HeldCoordinates, assemble, numerical_rank, update_kinematics, velocity_analysis
 from robot.model.mechanism import Mechanism
 from robot.model.resting_state import ideal_reactions, resting_pose
 
@@ -179,17 +179,10 @@ def _independent(constraints: C.ConstraintSet, q: np.ndarray, given: HeldCoordin
         unit = np.zeros((1, model.nv))
         unit[0, v_index] = 1.0
         trial = np.vstack([rows, unit])
-        if _rank(trial) > _rank(rows):
+        if numerical_rank(trial) > numerical_rank(rows):
             rows = trial
             keep.append(k)
     return HeldCoordinates(tuple(given.names[k] for k in keep), given.q_index[keep], given.v_index[keep], given.values[keep])
-
-
-def _rank(matrix: np.ndarray) -> int:
-    if matrix.size == 0:
-        return 0
-    singular_values = np.linalg.svd(matrix, compute_uv=False)
-    return int(np.sum(singular_values > RANK_TOLERANCE * max(1.0, singular_values[0])))
 
 
 def _project_velocities(constraints: C.ConstraintSet, q: np.ndarray, drive_rate: np.ndarray, given: HeldCoordinates) -> np.ndarray:

@@ -169,14 +169,17 @@ def acceleration_analysis(
     return _solve_redundant(constraints, model, data, phi_q, C.gamma(constraints, model, data, drive_acceleration), "acceleration analysis")
 
 
+def numerical_rank(matrix: np.ndarray) -> int:
+    """Singular values above :data:`RANK_TOLERANCE` x max(1, the largest); 0 for an empty matrix."""
+    if matrix.size == 0:
+        return 0
+    singular_values = np.linalg.svd(matrix, compute_uv=False)
+    return int(np.sum(singular_values > RANK_TOLERANCE * max(1.0, singular_values[0])))
+
+
 def mobility(constraints: C.ConstraintSet, q: np.ndarray, data: pin.Data | None = None) -> int:
     """Numerical degrees of freedom: nv - rank(Phi_q) at q (relative SVD tolerance)."""
     model = constraints.mechanism.model
     data = data or model.createData()
     update_kinematics(model, data, q)
-    phi_q = C.jacobian(constraints, model, data)
-    if phi_q.size == 0:
-        return model.nv
-    singular_values = np.linalg.svd(phi_q, compute_uv=False)
-    rank = int(np.sum(singular_values > RANK_TOLERANCE * max(1.0, singular_values[0])))
-    return model.nv - rank
+    return model.nv - numerical_rank(C.jacobian(constraints, model, data))
