@@ -69,7 +69,8 @@ def require_array(name: str, value, ndim: int | tuple[int, ...], *, length: int 
         raise AnalysisError(f"{name} must be an array of real numbers, got {type(value).__name__}") from None
     allowed = (ndim,) if isinstance(ndim, int) else ndim
     if a.ndim not in allowed:
-        raise AnalysisError(f"{name} must have {' or '.join(map(str, allowed))} dimension(s), got shape {a.shape}")
+        what = "be one-dimensional (n,)" if allowed == (1,) else f"have {' or '.join(map(str, allowed))} dimension(s)"
+        raise AnalysisError(f"{name} must {what}, got shape {a.shape}")
     if length is not None and a.shape[0] != length:
         raise AnalysisError(f"{name} has {a.shape[0]} rows but the time grid has {length} points")
     if not np.all(np.isfinite(a)):

@@ -136,9 +136,7 @@ def rosenstein_exponent(
     n_steps = require_count("n_steps", n_steps)
     if not 0 <= fit_start < fit_end <= n_steps:
         raise AnalysisError(f"fit range [fit_start={fit_start}, fit_end={fit_end}] must satisfy 0 <= fit_start < fit_end <= n_steps={n_steps}")
-    _, samples = resample_uniform(t, signal, 1.0 / dt, t_start=t_start, t_end=t_end)
-    if samples.ndim != 1:
-        raise AnalysisError(f"signal must be one-dimensional (n,), got shape {samples.shape}")
+    _, samples = resample_uniform(t, signal, 1.0 / dt, t_start=t_start, t_end=t_end, ndim=(1,))
     lag = autocorrelation_delay(samples) if delay is None else require_count("delay", delay)
     window = int(np.ceil(mean_period(samples))) if theiler_window is None else require_count("theiler_window", theiler_window, 0)
     divergence, n_pairs = mean_log_divergence(embed(samples, m, lag), window, n_steps)

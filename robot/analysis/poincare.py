@@ -64,12 +64,8 @@ def _padded(times: np.ndarray, points: np.ndarray, max_points: int) -> dict[str,
 
 
 def _state_series(t, state) -> tuple[np.ndarray, np.ndarray]:
-    times, values = time_series(t, state, name="state")
-    if values.ndim == 1:
-        values = values[:, None]
-    if values.ndim != 2:
-        raise AnalysisError(f"state must be (n,) or (n, components), got shape {values.shape}")
-    return times, values
+    times, values = time_series(t, state, name="state", ndim=(1, 2))
+    return times, (values[:, None] if values.ndim == 1 else values)
 
 
 @register(

@@ -38,7 +38,7 @@ from scipy import signal as scipy_signal
 
 from .errors import AnalysisError, require_count, require_positive
 from .registry import Field, register
-from .timegrid import cubic_interpolant, time_series, uniform_grid, window
+from .timegrid import cubic_interpolant, resample_uniform, time_series, uniform_grid, window
 
 _SIGNAL_INPUTS = (
     Field("t", ("time",), "s", "record times, non-decreasing (non-uniform allowed)"),
@@ -51,13 +51,6 @@ def _window(name: str, length: int) -> np.ndarray:
         return scipy_signal.get_window(name, length, fftbins=True)
     except (ValueError, TypeError) as error:
         raise AnalysisError(f"window={name!r} is not a scipy.signal window name ({error})") from None
-
-
-def _scalar_signal(t, signal) -> tuple[np.ndarray, np.ndarray]:
-    times, values = time_series(t, signal, name="signal")
-    if values.ndim != 1:
-        raise AnalysisError(f"signal must be one-dimensional (n,), got shape {values.shape}")
-    return times, values
 
 
 @register(
@@ -77,7 +70,7 @@ def amplitude_spectrum(
 ) -> dict[str, np.ndarray]:
     """One-sided amplitude spectrum of ``signal`` over ``[t_start, t_end)`` (module docstring)."""
     n = require_count("n_samples", n_samples, minimum=4)
-    times, values = _scalar_signal(t, signal)
+    times, values = time_series(t, signal, ndim=(1,))
     start, end = window(times, t_start, t_end)
     sample_rate = n / (end - start)
     samples = cubic_interpolant(times, values)(uniform_grid(start, end, sample_rate, n_samples=n))
@@ -124,9 +117,7 @@ def power_spectral_density(
     length = require_count("segment_length", segment_length, minimum=4)
     if not 0.0 <= overlap < 1.0:
         raise AnalysisError(f"overlap={overlap!r} is outside the valid range [0, 1)")
-    times, values = _scalar_signal(t, signal)
-    start, end = window(times, t_start, t_end)
-    samples = cubic_interpolant(times, values)(uniform_grid(start, end, fs))
+    _, samples = resample_uniform(t, signal, fs, t_start=t_start, t_end=t_end, ndim=(1,))
     if length > len(samples):
         raise AnalysisError(
             f"segment_length={length} exceeds the {len(samples)} samples of the window at sample_rate={fs!r} Hz"

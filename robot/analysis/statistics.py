@@ -20,16 +20,13 @@ from __future__ import annotations
 
 import numpy as np
 
-from .errors import AnalysisError
 from .registry import Field, register
 from .timegrid import time_series, window
 
 
 def window_records(t, signal, t_start: float | None, t_end: float | None) -> tuple[np.ndarray, np.ndarray]:
     """Records inside ``[t_start, t_end]`` with linearly interpolated end points added."""
-    times, values = time_series(t, signal, name="signal")
-    if values.ndim != 1:
-        raise AnalysisError(f"signal must be one-dimensional (n,), got shape {values.shape}")
+    times, values = time_series(t, signal, ndim=(1,))
     start, end = window(times, t_start, t_end)
     inside = (times > start) & (times < end)
     ends = np.interp([start, end], times, values)

@@ -20,14 +20,15 @@ from scipy.interpolate import CubicSpline
 from .errors import AnalysisError, require_array, require_positive
 
 
-def time_series(t, values, *, name: str = "signal") -> tuple[np.ndarray, np.ndarray]:
+def time_series(t, values, *, name: str = "signal", ndim: tuple[int, ...] = (1, 2, 3)) -> tuple[np.ndarray, np.ndarray]:
     """``(t, values)`` checked, sorted in time, with repeated times dropped (last record kept).
 
     ``t``: (n,) non-decreasing seconds, at least 2 distinct times; ``values``:
-    (n, ...) finite. AnalysisError names the first decreasing time.
+    (n, ...) finite, with one of the ``ndim`` numbers of dimensions. AnalysisError
+    names the first decreasing time.
     """
     times = require_array("t", t, 1)
-    data = require_array(name, values, (1, 2, 3), length=len(times))
+    data = require_array(name, values, ndim, length=len(times))
     steps = np.diff(times)
     if np.any(steps < 0.0):
         i = int(np.flatnonzero(steps < 0.0)[0])
@@ -69,10 +70,11 @@ def uniform_grid(start: float, end: float, sample_rate: float, *, n_samples: int
 
 
 def resample_uniform(
-    t, values, sample_rate: float, *, t_start: float | None = None, t_end: float | None = None, name: str = "signal"
+    t, values, sample_rate: float, *, t_start: float | None = None, t_end: float | None = None, name: str = "signal",
+    ndim: tuple[int, ...] = (1, 2, 3),
 ) -> tuple[np.ndarray, np.ndarray]:
     """``values`` at ``t_start + k / sample_rate`` (k = 0, 1, ... up to ``t_end``) from the cubic interpolant."""
-    times, data = time_series(t, values, name=name)
+    times, data = time_series(t, values, name=name, ndim=ndim)
     start, end = window(times, t_start, t_end)
     grid = uniform_grid(start, end, sample_rate)
     return grid, cubic_interpolant(times, data)(grid)
