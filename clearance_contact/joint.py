@@ -145,10 +145,11 @@ class ClearanceJoint:
     ``kernel``, ``penetration_kernel``: its law (signatures in the module docstring).
 
     Instances hold ``kernel_parameters`` (float64 array for the kernels) and call
-    :meth:`_wire_friction` and :meth:`_set_restitution` in their ``__init__``.
+    :meth:`_wire_friction` in their ``__init__`` and set ``_restitution`` and ``_dissipation``
+    (the name of a :mod:`~clearance_contact.dissipation` model, encoded into their parameters).
     """
 
-    __slots__ = ("_friction", "_force_over_speed", "_friction_code", "_restitution", "_given", "kernel_parameters")
+    __slots__ = ("_friction", "_force_over_speed", "_friction_code", "_restitution", "_dissipation", "_given", "kernel_parameters")
 
     type_name: ClassVar[str] = ""
     N_CANDIDATES: ClassVar[int] = 0
@@ -192,6 +193,11 @@ class ClearanceJoint:
         return code, parameters
 
     # -- parameters ------------------------------------------------------------------
+    @property
+    def dissipation(self) -> str:
+        """Name of the normal dissipation model (:mod:`~clearance_contact.dissipation`)."""
+        return self._dissipation
+
     @property
     def friction(self) -> FrictionLaw:
         return self._friction

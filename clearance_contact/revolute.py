@@ -1015,7 +1015,6 @@ class RevoluteClearanceJoint(ClearanceJoint):
         "_k_plane",
         "_k_point",
         "_radial_law",
-        "_dissipation",
         "_plane_density",
         "_half_l_b",
         "_half_l_j",
@@ -1213,11 +1212,6 @@ class RevoluteClearanceJoint(ClearanceJoint):
     def radial_stiffness(self) -> float | None:
         """K (N/m^n_r) of a power radial law for the whole bearing length; None for ``"johnson"``."""
         return self._k_line
-
-    @property
-    def dissipation(self) -> str:
-        """Name of the normal dissipation model (:mod:`~clearance_contact.dissipation`)."""
-        return self._dissipation
 
     @property
     def radial_law(self) -> RadialLaw:

@@ -330,7 +330,7 @@ class SphericalClearanceJoint(ClearanceJoint):
     ``N_CANDIDATES = 1``, ``N_ECCENTRICITY = 1``) from :class:`~clearance_contact.joint.ClearanceJoint`.
     """
 
-    __slots__ = ("_ball_radius", "_socket_radius", "_clearance", "_ball_material", "_socket_material", "_exponent", "_stiffness", "_dissipation")
+    __slots__ = ("_ball_radius", "_socket_radius", "_clearance", "_ball_material", "_socket_material", "_exponent", "_stiffness")
 
     type_name = "spherical"
     N_CANDIDATES = _K
@@ -434,11 +434,6 @@ class SphericalClearanceJoint(ClearanceJoint):
     @property
     def exponent(self) -> float:
         return self._exponent
-
-    @property
-    def dissipation(self) -> str:
-        """Name of the normal dissipation model (:mod:`~clearance_contact.dissipation`)."""
-        return self._dissipation
 
     @property
     def stiffness(self) -> float:

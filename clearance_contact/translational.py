@@ -405,7 +405,7 @@ def corner_table(half_length: float, half_width: float, half_height: float, plan
 class _SliderInGuide(ClearanceJoint):
     """What the spatial and planar translational joints share (not a registered type itself)."""
 
-    __slots__ = ("_length", "_width", "_height", "_guide_width", "_guide_height", "_slider_material", "_guide_material", "_exponent", "_stiffness", "_corner_radius", "_dissipation")
+    __slots__ = ("_length", "_width", "_height", "_guide_width", "_guide_height", "_slider_material", "_guide_material", "_exponent", "_stiffness", "_corner_radius")
 
     N_ECCENTRICITY = _N_ECCENTRICITY
     SITE_KINDS = ("prismatic",)
@@ -521,11 +521,6 @@ class _SliderInGuide(ClearanceJoint):
     @property
     def corner_radius(self) -> float | None:
         return self._corner_radius
-
-    @property
-    def dissipation(self) -> str:
-        """Name of the normal dissipation model (:mod:`~clearance_contact.dissipation`)."""
-        return self._dissipation
 
     @property
     def slider_material(self) -> Material:
