@@ -62,3 +62,20 @@ def test_tables_name_every_phase_and_the_floor_ratio():
     compared = RP.comparison_table(report, after)
     assert f"| outputs, CPU s | {phases['outputs']:.3f} | {phases['outputs'] / 4:.3f} | 0.25 |" in compared
     assert "integration / floor" in compared
+
+
+def test_table_lists_the_rounding_band_when_measured():
+    phases = {name: 0.1 for name in RP.RUN_PHASES}
+    report = {
+        "scene": "s", "repeats": 1, "load_average": (1.0, 1.0, 1.0), "cpus": 2,
+        "process": {"wall_s": 3.0, "cpu_s": 2.5, "peak_mib": 250.0},
+        "phases": {
+            "phases": phases, "step_loop": {}, "step_loop_calls": {},
+            "floor": {"n_rhs": 1, "rhs_us": 1.0, "n_jacobians": 0, "jacobian_us": float("nan"), "floor_s": 0.1},
+            "integration_over_floor": 1.0, "records": 1, "file_bytes": 1.0,
+        },
+    }
+    assert "rounding band" not in RP.table(report)
+    report["rounding_band"] = {"band": {"peak S1": 1.2e-5, "steps": 3.5e-3}}
+    text = RP.table(report)
+    assert "| peak S1 | 1.2e-05 |" in text and "| steps | 3.5e-03 |" in text

@@ -10,7 +10,9 @@ memory) and a worker process that does what the command does and times each
 phase in CPU seconds (imports, build, compile, integrate, outputs, write), then
 the step loop's parts (right-hand side, Jacobian, probe, solver step, onset and
 peak location, ...) and the floor: the right-hand side plus the Jacobian replayed
-at the run's states, times the run's counts of calls. Medians over the repeats
+at the run's states, times the run's counts of calls. With --rounding-band, also
+the scene's rounding band (peak forces, impulses and steps under 1-ulp
+perturbations: how close "unchanged" can be short of bit identity). Medians over the repeats
 (CPU time is robust on a shared machine; wall time is not). Writes OUT (JSON,
 atomically) and OUT with the suffix .md (the table), prints the table.
 The measurement is robot.analysis.studies.run_phases.
@@ -33,6 +35,12 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--repeats", type=positive_int, default=5, help="fresh-process runs of each measurement (default: 5)")
     parser.add_argument("--out", type=Path, default=DEFAULT_OUT, help=f"JSON report (default: {DEFAULT_OUT}); the table beside it (.md)")
     parser.add_argument("--compare", type=Path, default=None, help="an earlier report of this command: add a before/after table")
+    parser.add_argument(
+        "--rounding-band",
+        action="store_true",
+        help="also measure the scene's rounding band: how far peak forces, impulses and the step count move under 1-ulp "
+        "perturbations (7 more runs; robot.analysis.studies.rounding_band); the yardstick for 'physics unchanged'",
+    )
 
 
 def execute(args: argparse.Namespace) -> int:
@@ -49,6 +57,8 @@ def execute(args: argparse.Namespace) -> int:
         except (OSError, ValueError) as exc:
             raise UsageError(f"--compare={str(args.compare)!r} is not a report of this command ({exc})") from None
     report = benchmark(str(args.scene), args.repeats, progress=lambda line: print(line, file=sys.stderr, flush=True))
+    if args.rounding_band:
+        report["rounding_band"] = _rounding_band(str(args.scene))
     report["table"] = table(report)
     if before is not None:
         report["table"] += "\n\nbefore / after (medians):\n\n" + comparison_table(before, report)
@@ -57,3 +67,12 @@ def execute(args: argparse.Namespace) -> int:
     print(report["table"])
     print(f"wrote {out} and {out.with_suffix('.md')}")
     return EXIT_OK
+
+
+def _rounding_band(scene: str) -> dict:
+    from robot.analysis.studies.rounding_band import rounding_band
+    from robot.run import build_run, compile_kernels
+
+    run = build_run(scene)
+    compile_kernels(run)
+    return rounding_band(run, progress=lambda line: print(f"rounding band: {line}", file=sys.stderr, flush=True))

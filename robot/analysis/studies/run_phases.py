@@ -318,6 +318,10 @@ def table(report: dict) -> str:
         f"{phases['integration_over_floor']:.2f} x floor",
         f"records in memory {phases['records']:.0f}, file {phases['file_bytes'] / 1e6:.2f} MB",
     ]
+    if "rounding_band" in report:
+        band = report["rounding_band"]["band"]
+        lines += ["", "rounding band (largest relative change under 1-ulp perturbations of the initial state and the tolerances):", ""]
+        lines += ["| quantity | band |", "|---|---:|"] + [f"| {name} | {value:.1e} |" for name, value in band.items()]
     return "\n".join(lines)
 
 
