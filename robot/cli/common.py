@@ -93,11 +93,14 @@ def writable_file(path: Path, option: str) -> Path:
 
 @contextmanager
 def progress_bar(total: float, description: str, enabled: bool | None = None) -> Iterator[Callable[[float], None]]:
-    """A tqdm bar over simulated time (shown only on a terminal unless ``enabled``)."""
+    """A tqdm bar over simulated time (shown only on a terminal unless ``enabled``; hidden: tqdm is not imported)."""
+    enabled = sys.stderr.isatty() if enabled is None else enabled
+    if not enabled:
+        yield lambda t: None
+        return
     from tqdm import tqdm
 
-    enabled = sys.stderr.isatty() if enabled is None else enabled
-    bar = tqdm(total=total, desc=description, unit="s sim", disable=not enabled, bar_format="{l_bar}{bar}| {n:.4f}/{total:.3f} s [{elapsed}<{remaining}]")
+    bar = tqdm(total=total, desc=description, unit="s sim", bar_format="{l_bar}{bar}| {n:.4f}/{total:.3f} s [{elapsed}<{remaining}]")
     last = [0.0]
 
     def update(t: float) -> None:
