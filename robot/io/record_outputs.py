@@ -72,21 +72,17 @@ def _end_effector_writer(model: pin.Model, data: pin.Data, frame: int, arrays: d
     """``write(i, q, v, qdd)``: end-effector kinematics and the energies of record ``i`` (one forward kinematics pass).
 
     Pinocchio's functions and the arrays are bound once (a few microseconds a
-    record less than looking them up); the position is read through the
-    placement view of ``data.oMf`` (:func:`robot.dynamics.rhs_kernels.placement_buffer`),
-    the same memory as ``updateFramePlacement(...).translation`` without a wrapper object.
+    record less than looking them up at every record).
     """
     position, velocity, acceleration = arrays["ee_position"], arrays["ee_velocity"], arrays["ee_acceleration"]
     kinetic, potential = arrays["kinetic_energy"], arrays["potential_energy"]
-    placements = K.placement_buffer(data.oMf)
     forward_kinematics, update_placement = pin.forwardKinematics, pin.updateFramePlacement
     frame_velocity, frame_acceleration = pin.getFrameVelocity, pin.getFrameClassicalAcceleration
     kinetic_energy, potential_energy = pin.computeKineticEnergy, pin.computePotentialEnergy
 
     def write(i: int, q: np.ndarray, v: np.ndarray, qdd: np.ndarray) -> None:
         forward_kinematics(model, data, q, v, qdd)
-        update_placement(model, data, frame)
-        position[i] = placements[frame, 9:12]
+        position[i] = update_placement(model, data, frame).translation
         velocity[i] = frame_velocity(model, data, frame, LWA).linear
         acceleration[i] = frame_acceleration(model, data, frame, LWA).linear
         kinetic[i] = kinetic_energy(model, data)
