@@ -19,7 +19,7 @@ stored in them) and per element ``force_NAME`` (its scalar force or torque).
   (:func:`robot.dynamics.equations.state_derivative`), whose by-products are the
   outputs: ``qdd``, Pinocchio's multipliers of the driving rows (= the driving
   forces, :mod:`robot.dynamics.equations`), the two powers, every law's flat
-  output (read in one vectorised pass per joint after the loop,
+  output (read in one vectorised pass per joint and chunk of :data:`CHUNK` records,
   :meth:`~clearance_contact.ClearanceJoint.record_outputs`); then one
   ``forwardKinematics(q, v, qdd)`` gives the end-effector kinematics and both
   energies. About 5 x cheaper a record; it applies where the compiled right-hand
