@@ -9,6 +9,6 @@ from pathlib import Path
 
 if __name__ == "__main__":
     sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # this checkout's robot/, installed or not
-    from robot.cli.main import main
+    from robot.cli.main import main, exit_process
 
-    sys.exit(main(["sweep", *sys.argv[1:]]))
+    exit_process(main(["sweep", *sys.argv[1:]]))

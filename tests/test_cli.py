@@ -209,6 +209,37 @@ def test_counters_print_n_a_when_unknown():
     assert count_text(-1) == "n/a" and count_text(None) == "n/a" and count_text(0) == "0" and count_text(2.5, ".1f") == "2.5"
 
 
+def test_the_setup_is_spared_by_the_collector_and_the_caller_gets_its_collector_back():
+    import gc
+
+    from robot.cli.common import collector_spared_setup
+
+    assert gc.isenabled() and gc.get_freeze_count() == 0
+    with collector_spared_setup() as set_up:
+        assert not gc.isenabled()
+        kept = [[] for _ in range(1000)]  # objects of the setup
+        set_up()
+        assert gc.isenabled() and gc.get_freeze_count() >= len(kept)
+    assert gc.isenabled() and gc.get_freeze_count() == 0
+    gc.disable()
+    try:
+        with pytest.raises(KeyError), collector_spared_setup():
+            raise KeyError("a failed setup")
+        assert not gc.isenabled() and gc.get_freeze_count() == 0  # the caller's state, whatever happened
+    finally:
+        gc.enable()
+
+
+def test_the_process_exit_keeps_the_exit_status_and_the_buffered_output():
+    import subprocess
+    import sys
+
+    code = "import sys; from robot.cli.main import exit_process; print('buffered', end=''); sys.stderr.write('err'); exit_process(3)"
+    environment = {key: value for key, value in os.environ.items() if key != "PYTHONUNBUFFERED"}  # stdout block-buffered
+    done = subprocess.run([sys.executable, "-c", code], cwd=ROOT, env=environment, capture_output=True, text=True, timeout=60)
+    assert (done.returncode, done.stdout, done.stderr) == (3, "buffered", "err")
+
+
 def test_a_failed_write_saves_the_result_to_a_temporary_folder_named_in_the_message(capsys, tmp_path):
     from robot.cli.outputs import save_or_fallback
     from robot.run import build_run, run_scene

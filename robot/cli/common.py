@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import gc
 import math
 import sys
 import tempfile
@@ -92,11 +93,14 @@ def writable_file(path: Path, option: str) -> Path:
 
 @contextmanager
 def progress_bar(total: float, description: str, enabled: bool | None = None) -> Iterator[Callable[[float], None]]:
-    """A tqdm bar over simulated time (shown only on a terminal unless ``enabled``)."""
+    """A tqdm bar over simulated time (shown only on a terminal unless ``enabled``; hidden: tqdm is not imported)."""
+    enabled = sys.stderr.isatty() if enabled is None else enabled
+    if not enabled:
+        yield lambda t: None
+        return
     from tqdm import tqdm
 
-    enabled = sys.stderr.isatty() if enabled is None else enabled
-    bar = tqdm(total=total, desc=description, unit="s sim", disable=not enabled, bar_format="{l_bar}{bar}| {n:.4f}/{total:.3f} s [{elapsed}<{remaining}]")
+    bar = tqdm(total=total, desc=description, unit="s sim", bar_format="{l_bar}{bar}| {n:.4f}/{total:.3f} s [{elapsed}<{remaining}]")
     last = [0.0]
 
     def update(t: float) -> None:
@@ -108,6 +112,38 @@ def progress_bar(total: float, description: str, enabled: bool | None = None) ->
         yield update
     finally:
         bar.close()
+
+
+@contextmanager
+def collector_spared_setup() -> Iterator[Callable[[], None]]:
+    """Keep Python's cyclic garbage collector off a command's setup: ``with collector_spared_setup() as set_up:``.
+
+    A run's imports and model (numba's types and dispatchers, Pinocchio, scipy,
+    the mechanism: ~10^5 objects) live until the command ends, and every
+    collection of the oldest generation walks them all: 0.1 s of CPU of
+    collections in ``clearance run``, measured, for no garbage found. Inside the
+    block the collector is off until ``set_up()`` (call it once the setup is
+    built), which freezes every object then alive (``gc.freeze``: left out of
+    later collections) and turns the collector back on for the run. Leaving the
+    block unfreezes them and restores the collector's state, so a caller that
+    runs commands in its own process (tests) keeps an ordinary collector. The
+    setup's garbage cycles (made while the collector was off) are kept until the
+    block ends: it did not change the peak memory of ``clearance run``.
+    """
+    enabled = gc.isenabled()
+    gc.disable()
+
+    def set_up() -> None:
+        gc.freeze()
+        if enabled:
+            gc.enable()
+
+    try:
+        yield set_up
+    finally:
+        gc.unfreeze()
+        if enabled:
+            gc.enable()
 
 
 def count_text(value: float | int | None, fmt: str = "d") -> str:

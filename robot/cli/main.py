@@ -10,9 +10,11 @@ bug (exit 3, with the traceback).
 from __future__ import annotations
 
 import argparse
+import gc
 import importlib
 import sys
 import traceback
+from typing import NoReturn
 
 from robot.cli.common import EXIT_BAD_INPUT, EXIT_CODES_HELP, EXIT_INTERNAL, EXIT_INTERRUPTED
 from robot.cli.registry import COMMANDS, SUMMARIES
@@ -95,9 +97,24 @@ def main(argv: list[str] | None = None) -> int:
         return EXIT_INTERNAL
 
 
+def exit_process(code: int) -> NoReturn:
+    """End the process with exit status ``code`` once a command has returned (its files written, its output printed).
+
+    At exit Python collects the garbage of every object left, numba's and LLVM's
+    object graphs included: 0.25-0.35 s of CPU after ``clearance run``, more than
+    its imports. ``gc.freeze()`` first puts them out of the collector's reach, and
+    the interpreter exits in ~0.03 s. The rest of a normal exit stays (unlike
+    ``os._exit``): atexit handlers, the flush of stdout and stderr, the exit
+    status. A command's files are closed and in place (atomic writes) before it
+    returns, so no unfinalised object holds unwritten data.
+    """
+    gc.freeze()
+    sys.exit(code)
+
+
 def console_main() -> None:
     """Entry point of the ``clearance`` console script."""
-    sys.exit(main())
+    exit_process(main())
 
 
 if __name__ == "__main__":

@@ -17,7 +17,9 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from robot.cli.common import EXIT_INTERRUPTED, EXIT_OK, EXIT_RUN_FAILED, count_text, positive_seconds, progress_bar, writable_folder
+from robot.cli.common import (
+    EXIT_INTERRUPTED, EXIT_OK, EXIT_RUN_FAILED, collector_spared_setup, count_text, positive_seconds, progress_bar, writable_folder,
+)
 from robot.cli.interrupts import Phase, clean_stops
 
 
@@ -31,12 +33,13 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def execute(args: argparse.Namespace) -> int:
-    from robot.cli.outputs import save_or_fallback
-    from robot.run import build_run, compile_kernels, run_scene
-
     out = None if args.check else writable_folder(args.out)
-    with clean_stops() as stops:
+    with collector_spared_setup() as set_up, clean_stops() as stops:
+        from robot.cli.outputs import save_or_fallback
+        from robot.run import build_run, compile_kernels, run_scene
+
         run = build_run(args.scene, duration=args.t_end)
+        set_up()  # the imports and the model live until the end: out of the garbage collector's walks
         if args.check:
             print(f"{run.scene.name}: scene valid; mechanism {run.scene.mechanism_path.name}, nq {run.mechanism.model.nq}, "
                   f"clearance joints {list(run.scene.clearance_joints) or 'none'}, duration {run.scene.duration:g} s")

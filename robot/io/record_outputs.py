@@ -19,7 +19,7 @@ stored in them) and per element ``force_NAME`` (its scalar force or torque).
   (:func:`robot.dynamics.equations.state_derivative`), whose by-products are the
   outputs: ``qdd``, Pinocchio's multipliers of the driving rows (= the driving
   forces, :mod:`robot.dynamics.equations`), the two powers, every law's flat
-  output (read in one vectorised pass per joint after the loop,
+  output (read in one vectorised pass per joint and chunk of :data:`CHUNK` records,
   :meth:`~clearance_contact.ClearanceJoint.record_outputs`); then one
   ``forwardKinematics(q, v, qdd)`` gives the end-effector kinematics and both
   energies. About 5 x cheaper a record; it applies where the compiled right-hand
@@ -29,6 +29,8 @@ stored in them) and per element ``force_NAME`` (its scalar force or torque).
 
 from __future__ import annotations
 
+from typing import Callable
+
 import numpy as np
 import pinocchio as pin
 
@@ -36,6 +38,8 @@ from robot.dynamics import equations as D
 from robot.dynamics import rhs_kernels as K
 
 LWA = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
+#: records whose laws' outputs and element poses :func:`compiled_outputs` buffers before writing them (1.5 MB for the 4-UPS/RPS)
+CHUNK = 1024
 
 
 def allocate(dynamics: D.DynamicsModel, n: int) -> tuple[dict[str, np.ndarray], dict[str, dict[str, np.ndarray]]]:
@@ -64,14 +68,27 @@ def compiled_applies(dynamics: D.DynamicsModel, workspace: D.DynamicsWorkspace) 
     return compiled is not None and (compiled.fused is not None or not dynamics.contacts)
 
 
-def _end_effector(model: pin.Model, data: pin.Data, frame: int, q, v, qdd, arrays: dict, i: int) -> None:
-    """End-effector kinematics and the energies of record ``i`` (Pinocchio: one forward kinematics pass)."""
-    pin.forwardKinematics(model, data, q, v, qdd)
-    arrays["ee_position"][i] = pin.updateFramePlacement(model, data, frame).translation
-    arrays["ee_velocity"][i] = pin.getFrameVelocity(model, data, frame, LWA).linear
-    arrays["ee_acceleration"][i] = pin.getFrameClassicalAcceleration(model, data, frame, LWA).linear
-    arrays["kinetic_energy"][i] = pin.computeKineticEnergy(model, data)
-    arrays["potential_energy"][i] = pin.computePotentialEnergy(model, data)
+def _end_effector_writer(model: pin.Model, data: pin.Data, frame: int, arrays: dict[str, np.ndarray]) -> Callable[[int, np.ndarray, np.ndarray, np.ndarray], None]:
+    """``write(i, q, v, qdd)``: end-effector kinematics and the energies of record ``i`` (one forward kinematics pass).
+
+    Pinocchio's functions and the arrays are bound once (a few microseconds a
+    record less than looking them up at every record).
+    """
+    position, velocity, acceleration = arrays["ee_position"], arrays["ee_velocity"], arrays["ee_acceleration"]
+    kinetic, potential = arrays["kinetic_energy"], arrays["potential_energy"]
+    forward_kinematics, update_placement = pin.forwardKinematics, pin.updateFramePlacement
+    frame_velocity, frame_acceleration = pin.getFrameVelocity, pin.getFrameClassicalAcceleration
+    kinetic_energy, potential_energy = pin.computeKineticEnergy, pin.computePotentialEnergy
+
+    def write(i: int, q: np.ndarray, v: np.ndarray, qdd: np.ndarray) -> None:
+        forward_kinematics(model, data, q, v, qdd)
+        position[i] = update_placement(model, data, frame).translation
+        velocity[i] = frame_velocity(model, data, frame, LWA).linear
+        acceleration[i] = frame_acceleration(model, data, frame, LWA).linear
+        kinetic[i] = kinetic_energy(model, data)
+        potential[i] = potential_energy(model, data)
+
+    return write
 
 
 def reference_outputs(
@@ -85,6 +102,7 @@ def reference_outputs(
     arrays, per_site = allocate(dynamics, len(t))
     act = mechanism.actuator_v_index
     forces = workspace.forces
+    end_effector = _end_effector_writer(model, data, dynamics.end_effector_frame, arrays)
     for i in range(len(t)):
         q = D.normalise_quaternions(mechanism, y[i, :nq])
         v = y[i, nq : nq + nv]
@@ -100,14 +118,19 @@ def reference_outputs(
         for contact, result in zip(dynamics.contacts, evaluation.contacts):
             outer, inner = data.oMf[contact.site.outer_frame], data.oMf[contact.site.inner_frame]
             contact.law.record(per_site[contact.site.name], i, result, outer.rotation, outer.translation, inner.translation)
-        _end_effector(model, data, dynamics.end_effector_frame, q, v, evaluation.qdd, arrays, i)
+        end_effector(i, q, v, evaluation.qdd)
     return _with_sites(dynamics, arrays, per_site)
 
 
 def compiled_outputs(
     dynamics: D.DynamicsModel, t: np.ndarray, y: np.ndarray, onset: np.ndarray, workspace: D.DynamicsWorkspace | None = None
 ) -> dict[str, np.ndarray]:
-    """The derived arrays through the compiled right-hand side (module docstring); :func:`compiled_applies` must hold."""
+    """The derived arrays through the compiled right-hand side (module docstring); :func:`compiled_applies` must hold.
+
+    The laws' flat outputs and the element poses are gathered per chunk of
+    :data:`CHUNK` records and written per chunk (:func:`_record_sites`), so their
+    buffers stay small whatever the number of records.
+    """
     mechanism = dynamics.mechanism
     model, nq, nv = mechanism.model, dynamics.nq, dynamics.nv
     workspace = workspace or D.make_workspace(dynamics)
@@ -116,39 +139,48 @@ def compiled_outputs(
     data, compiled = workspace.data, workspace.compiled
     n = len(t)
     arrays, per_site = allocate(dynamics, n)
-    site_outputs = np.empty((n, compiled.site_outputs_buffer.shape[0]))
     driving, residual = arrays["driving_force"], arrays["constraint_residual"]
     actuator_power, contact_power = arrays["actuator_power"], arrays["contact_power"]
-    frame, drive = dynamics.end_effector_frame, workspace.drive
+    drive, forces, buffer = workspace.drive, workspace.forces, compiled.site_outputs_buffer
     frames_a, frames_b, actuator_q, placements = compiled.frames_a, compiled.frames_b, compiled.actuator_q, compiled.placements
     closure_rows = compiled.closure_rows
     # per record the placements (rotation, then translation) of every clearance joint's two element frames
     site_frames = np.array([[c.site.outer_frame, c.site.inner_frame] for c in dynamics.contacts], dtype=np.int64).reshape(-1)
-    poses = np.empty((n, site_frames.shape[0], K.SE3_FLOATS))
-    forces = workspace.forces
-    for i in range(n):
-        time = float(t[i])
-        rate = D.state_derivative(dynamics, workspace, time, y[i], onset[i])
-        q = pin.normalize(model, y[i, :nq])
-        v = y[i, nq : nq + nv]
+    chunk = min(n, CHUNK)
+    site_outputs, poses = np.empty((chunk, buffer.shape[0])), np.empty((chunk, site_frames.shape[0], K.SE3_FLOATS))
+    end_effector = _end_effector_writer(model, data, dynamics.end_effector_frame, arrays)
+    state_derivative, normalize, largest_residual = D.state_derivative, pin.normalize, K.largest_residual
+    positions, velocities, work = y[:, :nq], y[:, nq : nq + nv], nq + nv
+    for i, time in enumerate(t.tolist()):
+        rate = state_derivative(dynamics, workspace, time, y[i], onset[i])
+        q, v = normalize(model, positions[i]), velocities[i]
         # Pinocchio's multipliers of the driving rows are the driving forces (equations module docstring)
         driving[i] = data.lambda_c[workspace.rows.n_closure_kept :]
         # the actuator power of the right-hand side includes the force-driven actuators' (as the reference)
-        actuator_power[i], contact_power[i] = rate[nq + nv], rate[nq + nv + 1]
+        actuator_power[i], contact_power[i] = rate[work], rate[work + 1]
         if forces is not None:
             arrays["force_scalars"][i], arrays["force_energy"][i] = forces.scalars, forces.potential_energy(q)
-        residual[i] = K.largest_residual(placements, frames_a, frames_b, closure_rows, q, drive.values(time), actuator_q)
-        site_outputs[i] = compiled.site_outputs_buffer
-        poses[i] = placements[site_frames]
-        _end_effector(model, data, frame, q, v, rate[nq : nq + nv], arrays, i)
-    rows = np.arange(n)
+        residual[i] = largest_residual(placements, frames_a, frames_b, closure_rows, q, drive.values(time), actuator_q)
+        row = i % chunk
+        site_outputs[row] = buffer
+        placements.take(site_frames, axis=0, out=poses[row], mode="clip")  # the indices are valid: no bounds check
+        end_effector(i, q, v, rate[nq:work])
+        if row == chunk - 1 or i == n - 1:
+            _record_sites(dynamics, compiled, per_site, np.arange(i - row, i + 1), site_outputs[: row + 1], poses[: row + 1])
+    return _with_sites(dynamics, arrays, per_site)
+
+
+def _record_sites(
+    dynamics: D.DynamicsModel, compiled: D.CompiledTerms, per_site: dict[str, dict[str, np.ndarray]], rows: np.ndarray, site_outputs: np.ndarray, poses: np.ndarray
+) -> None:
+    """Each clearance joint's arrays at the records ``rows`` from the laws' flat outputs and the element poses there."""
+    m = rows.shape[0]
     for index, contact in enumerate(dynamics.contacts):
         first, end = compiled.site_table[index, K.SITE_OUT], compiled.site_table[index, K.SITE_OUT_END]
         outer, inner = poses[:, 2 * index], poses[:, 2 * index + 1]
         # a placement row holds the rotation column-major: its 3 x 3 reshape is the rotation's transpose
-        rotation = outer[:, 0:9].reshape(n, 3, 3).transpose(0, 2, 1)
+        rotation = outer[:, 0:9].reshape(m, 3, 3).transpose(0, 2, 1)
         contact.law.record_outputs(per_site[contact.site.name], rows, site_outputs[:, first:end], rotation, outer[:, 9:12], inner[:, 9:12])
-    return _with_sites(dynamics, arrays, per_site)
 
 
 def _with_sites(dynamics: D.DynamicsModel, arrays: dict[str, np.ndarray], per_site: dict[str, dict[str, np.ndarray]]) -> dict[str, np.ndarray]:

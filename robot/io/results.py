@@ -215,13 +215,14 @@ def kept_rows(kind: np.ndarray, output: OutputSpec | None) -> np.ndarray | None:
     With an output grid (``output.step``, when the run recorded it: record kind 4
     present) the ends of integration steps are dropped; the grid, every located
     record (start, onsets, penetration and force maxima) and the last record
-    (where a failed run stopped) stay.
+    (where a failed run stopped) stay. None also when every record stays (the
+    outputs were computed at the kept records only): saving then copies no array.
     """
     if output is None or output.step is None or not np.any(kind == RECORD_OUTPUT):
         return None
     rows = kind != RECORD_STEP
     rows[-1] = True
-    return rows
+    return None if rows.all() else rows
 
 
 def compute_outputs(dynamics: D.DynamicsModel, trajectory: Trajectory, output: OutputSpec | None = None) -> dict[str, np.ndarray]:
