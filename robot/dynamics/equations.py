@@ -236,6 +236,8 @@ class CompiledTerms:
         self.jacobian = data.J.reshape(6, model.nv)
         self.jacobian_rate = data.dJ.reshape(6, model.nv)
         self.phi_q = kernel.phi_q  # driving rows written once by the kernel
+        # sizes as plain ints (a read of a Pinocchio property costs ~0.1 us)
+        self.model, self.nq, self.nq_nv, self.state_size = model, model.nq, model.nq + model.nv, dynamics.state_size
         self.n_closure_rows = kernel.n_closure_rows
         self.n_candidates = dynamics.n_candidates
         laws = [contact.law for contact in dynamics.contacts]
@@ -583,16 +585,16 @@ def state_derivative(
     when its cheap ``penetration()`` shows contact). Raises ``ContactError`` as
     :func:`evaluate` does.
     """
+    workspace.rhs_calls += 1
+    compiled = workspace.compiled
+    if compiled is not None:
+        return _compiled_state_derivative(dynamics, workspace, compiled, t, y, onset_rates)
     mechanism = dynamics.mechanism
     model, data = mechanism.model, workspace.data
     kernel = workspace.kernel
     nq, nv = model.nq, model.nv
-    workspace.rhs_calls += 1
     q = pin.normalize(model, y[:nq])  # a copy with unit quaternions
     v = y[nq : nq + nv]
-    compiled = workspace.compiled
-    if compiled is not None:
-        return _compiled_state_derivative(dynamics, workspace, compiled, t, q, v, onset_rates)
     s, sd, sdd = workspace.drive(t)
     pin.computeAllTerms(model, data, q, v)
     pin.updateFramePlacements(model, data)
@@ -635,12 +637,13 @@ def _compiled_state_derivative(
     workspace: DynamicsWorkspace,
     compiled: CompiledTerms,
     t: float,
-    q: np.ndarray,
-    v: np.ndarray,
+    y: np.ndarray,
     onset_rates: np.ndarray,
 ) -> np.ndarray:
     """:func:`state_derivative` through :mod:`robot.dynamics.rhs_kernels` (same equations)."""
-    model, data = dynamics.mechanism.model, workspace.data
+    model, data, nq = compiled.model, workspace.data, compiled.nq
+    q = pin.normalize(model, y[:nq])  # a copy with unit quaternions
+    v = y[nq : compiled.nq_nv]
     drive = workspace.drive.values(t)
     # C++: M (CRBA), h (RNEA at zero acceleration), world joint Jacobians and their rates, frames
     pin.nonLinearEffects(model, data, q, v)
@@ -654,14 +657,14 @@ def _compiled_state_derivative(
         _raise_site_failure(dynamics, workspace, compiled, code, onset_rates, t)
     if compiled.fused is None:
         _compiled_sites(dynamics, workspace, compiled, t, v, onset_rates, tau)
-    out = np.empty(model.nq + model.nv + dynamics.n_work)
+    out = np.empty(compiled.state_size)
     # force elements: data.oMi and data.J are at q (computeJointJacobiansTimeVariation)
     forces = workspace.forces
     qdd = solve_kkt(dynamics, workspace, tau if forces is None else tau + forces.evaluate(t, q, v), phi_q, compiled.drift)
     # [q', qdd, actuator power (driving force = Pinocchio's multiplier of the driving row, times the rate), contact power]
     K.finish_derivative(work, indices, data.lambda_c, workspace.rows.n_closure_kept, v, qdd, pin.tangentMapProduct(model, q, v[:, None]), out)
     if forces is not None:
-        _add_force_powers(forces, out, model.nq + model.nv)
+        _add_force_powers(forces, out, compiled.nq_nv)
     return out
 
 
