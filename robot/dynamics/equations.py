@@ -262,13 +262,13 @@ class CompiledTerms:
                 _probe_gather(dynamics, table) if self.fused else np.zeros((0, 3)),
             ],
             [
-                np.zeros(kernel.n_rows), np.zeros(model.nv), [2.0 * gains.alpha, gains.beta * gains.beta],
+                np.zeros(kernel.n_rows), np.zeros(model.nv), [2.0 * gains.alpha, gains.beta * gains.beta], np.zeros(3 * len(actuators[0])),
                 np.concatenate([np.zeros(0), *parameters]), np.zeros(sum(sizes)), np.zeros((len(laws), 2, 6)),
             ],
         )  # fmt: skip
         (
             self.frames_a, self.frames_b, self.closure_rows, self.actuator_q, self.actuator_v, self.closure_masks, self.site_table,
-            self.site_masks, _, self.drift, self.tau, _, self.site_parameters, self.site_outputs_buffer, self.site_twists,
+            self.site_masks, _, self.drift, self.tau, _, _, self.site_parameters, self.site_outputs_buffer, self.site_twists,
         ) = views  # fmt: skip
         self._build_sites(dynamics, compiled_law, sizes, parameters)
         self._build_output_views(dynamics)
@@ -418,8 +418,11 @@ class DriveTable:
     def drive(self) -> Drive:
         return self._drive()
 
-    def values(self, t: float) -> np.ndarray:
-        """``[s, sd, sdd]`` at t as one new array (3 m values)."""
+    def polynomial(self, t: float) -> tuple[np.ndarray, float]:
+        """``(coefficients, x)``: ``[s, sd, sdd](t) = sum_k coefficients[k] x^k`` (:func:`robot.dynamics.rhs_kernels.power_series`).
+
+        On a segment evaluated exactly: the exact values as the only row, ``x = 0``.
+        """
         if not self._low <= t < self._high:  # not the segment of the previous call
             k = math.floor(t / self.width)
             segment = self.segments.get(k)
@@ -427,11 +430,16 @@ class DriveTable:
                 segment = self._build(k)
             self._last = segment
             self._low, self._high = k * self.width, (k + 1) * self.width
-        middle, coefficients, m = self._last
+        middle, coefficients, _ = self._last
         if coefficients is None:
-            return np.concatenate(self.drive.drive(t))
-        out = np.empty(3 * m)
-        K.power_series(coefficients, (t - middle) * self._to_unit, out)
+            return np.concatenate(self.drive.drive(t))[None, :], 0.0
+        return coefficients, (t - middle) * self._to_unit
+
+    def values(self, t: float) -> np.ndarray:
+        """``[s, sd, sdd]`` at t as one new array (3 m values)."""
+        coefficients, x = self.polynomial(t)
+        out = np.empty(coefficients.shape[1])
+        K.power_series(coefficients, x, out)
         return out
 
     def __call__(self, t: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -644,15 +652,15 @@ def _compiled_state_derivative(
     model, data, nq = compiled.model, workspace.data, compiled.nq
     q = pin.normalize(model, y[:nq])  # a copy with unit quaternions
     v = y[nq : compiled.nq_nv]
-    drive = workspace.drive.values(t)
+    coefficients, x = workspace.drive.polynomial(t)
     # C++: M (CRBA), h (RNEA at zero acceleration), world joint Jacobians and their rates, frames
     pin.nonLinearEffects(model, data, q, v)
     pin.crba(model, data, q)
     pin.computeJointJacobiansTimeVariation(model, data, q, v)
     pin.updateFramePlacements(model, data)
     work, indices, phi_q, tau = compiled.work, compiled.indices, compiled.phi_q, compiled.tau
-    # closure rows and drift, tau = 0, and every site when all laws are shipped compiled laws
-    code = K.rhs_terms(work, indices, compiled.placements, compiled.jacobian, compiled.jacobian_rate, q, v, drive, onset_rates, phi_q)
+    # the drive, closure rows and drift, tau = 0, and every site when all laws are shipped compiled laws
+    code = K.rhs_terms(work, indices, compiled.placements, compiled.jacobian, compiled.jacobian_rate, q, v, coefficients, x, onset_rates, phi_q)
     if code != 0:
         _raise_site_failure(dynamics, workspace, compiled, code, onset_rates, t)
     if compiled.fused is None:
@@ -662,7 +670,7 @@ def _compiled_state_derivative(
     forces = workspace.forces
     qdd = solve_kkt(dynamics, workspace, tau if forces is None else tau + forces.evaluate(t, q, v), phi_q, compiled.drift)
     # [q', qdd, actuator power (driving force = Pinocchio's multiplier of the driving row, times the rate), contact power]
-    K.finish_derivative(work, indices, data.lambda_c, workspace.rows.n_closure_kept, v, qdd, pin.tangentMapProduct(model, q, v[:, None]), out)
+    K.finish_derivative(work, indices, data.lambda_c, workspace.rows.n_closure_kept, v, qdd, pin.tangentMapProduct(model, q, v), out)
     if forces is not None:
         _add_force_powers(forces, out, compiled.nq_nv)
     return out
@@ -706,7 +714,7 @@ def _raise_contact_error(dynamics: DynamicsModel, workspace: DynamicsWorkspace, 
     raise ContactError(f"contact law of {dynamics.contacts[index].site.name!r} failed (status {status}) at t={t!r}")
 
 
-_NO_DRIVE = np.zeros(0)  # the probe's drive when the residual is not asked for
+_NO_DRIVE = (np.zeros((1, 0)), 0.0)  # the probe's drive polynomial when the residual is not asked for (not read)
 
 
 def contact_probe(
@@ -725,14 +733,16 @@ def contact_probe(
     if compiled is not None and compiled.laws_compiled:
         pin.computeJointJacobians(model, data, q)
         pin.updateFramePlacements(model, data)
-        drive = workspace.drive.values(t) if residual else _NO_DRIVE
         # compiled.tau receives the (unused) J^T w: every right-hand side starts by zeroing it
         if compiled.fused is not None:
-            code, worst = K.probe(compiled.work, compiled.indices, compiled.placements, compiled.jacobian, q, v, drive, onset_rates, pen, rate, force, residual)
+            coefficients, x = workspace.drive.polynomial(t) if residual else _NO_DRIVE
+            code, worst = K.probe(compiled.work, compiled.indices, compiled.placements, compiled.jacobian, q, v, coefficients, x, onset_rates, pen, rate, force, residual)
             if code != 0:
                 _raise_site_failure(dynamics, workspace, compiled, code, onset_rates, t)
             return Probe(pen, rate, worst, force)
-        worst = K.largest_residual(compiled.placements, compiled.frames_a, compiled.frames_b, compiled.closure_rows, q, drive, compiled.actuator_q) if residual else math.nan
+        worst = math.nan
+        if residual:
+            worst = K.largest_residual(compiled.placements, compiled.frames_a, compiled.frames_b, compiled.closure_rows, q, workspace.drive.values(t), compiled.actuator_q)
         _compiled_sites(dynamics, workspace, compiled, t, v, onset_rates, compiled.tau)
         for candidates, penetration, penetration_rate, normal_force in compiled.site_outputs:
             pen[candidates] = penetration

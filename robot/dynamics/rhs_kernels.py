@@ -306,9 +306,9 @@ def largest_residual(placements, frames_a, frames_b, closure_rows, q, drive, act
 
 @jit
 def power_series(coefficients, x, out):
-    """out[j] = sum_k coefficients[k, j] x^k (Horner's rule)."""
+    """out[j] = sum_k coefficients[k, j] x^k (Horner's rule), for every j of ``out``."""
     n = coefficients.shape[0]
-    for j in range(coefficients.shape[1]):
+    for j in range(out.shape[0]):
         value = coefficients[n - 1, j]
         for k in range(n - 2, -1, -1):
             value = value * x + coefficients[k, j]
@@ -405,8 +405,8 @@ def probe_sites(placements, J, v, onset_rates, tau, table, masks, parameters, ou
 (
     FRAMES_A, FRAMES_B, CLOSURE_ROWS, ACTUATOR_Q, ACTUATOR_V, CLOSURE_MASKS, SITE_TABLE, SITE_MASKS, PROBE_GATHER,
 ) = range(9)  # fmt: skip
-#: ... then float64 (``GAINS`` = [2 alpha, beta^2])
-DRIFT, TAU, GAINS, LAW_PARAMETERS, LAW_OUTPUTS, SITE_TWISTS = range(9, 15)
+#: ... then float64 (``GAINS`` = [2 alpha, beta^2]; ``DRIVE`` = [s, sd, sdd] of the driving rows, empty without)
+DRIFT, TAU, GAINS, DRIVE, LAW_PARAMETERS, LAW_OUTPUTS, SITE_TWISTS = range(9, 16)
 
 
 def pack(integers: list[np.ndarray], floats: list[np.ndarray]) -> tuple[np.ndarray, np.ndarray, list[np.ndarray]]:
@@ -455,14 +455,17 @@ def _cube(buffer, indices, slot):
 
 
 @jit
-def rhs_terms(work, indices, placements, J, dJ, q, v, drive, onset_rates, phi_q):
+def rhs_terms(work, indices, placements, J, dJ, q, v, drive_coefficients, x, onset_rates, phi_q):
     """The compiled terms of one right-hand side before its KKT solve, in one call (packed arrays, :func:`pack`).
 
-    :func:`closure_drift` (``phi_q``'s closure rows and the ``DRIFT`` slot), then
-    ``TAU = 0`` and, for the sites of the ``SITE_TABLE`` slot (none when the laws
-    are evaluated site by site), :func:`all_sites`, whose code it returns.
+    The ``DRIVE`` slot from the drive's polynomial (:func:`power_series`,
+    ``DriveTable.polynomial``), :func:`closure_drift` (``phi_q``'s closure rows and
+    the ``DRIFT`` slot), then ``TAU = 0`` and, for the sites of the ``SITE_TABLE``
+    slot (none when the laws are evaluated site by site), :func:`all_sites`, whose code it returns.
     """
     gains = _flat(work, indices, GAINS)
+    drive = _flat(work, indices, DRIVE)
+    power_series(drive_coefficients, x, drive)
     closure_drift(
         placements, J, dJ, _matrix(indices, indices, CLOSURE_MASKS), _flat(indices, indices, FRAMES_A), _flat(indices, indices, FRAMES_B),
         _flat(indices, indices, CLOSURE_ROWS), q, v, drive, _flat(indices, indices, ACTUATOR_Q), _flat(indices, indices, ACTUATOR_V),
@@ -499,10 +502,13 @@ def finish_derivative(work, indices, multipliers, first_driving_row, v, qdd, con
 
 
 @jit
-def probe(work, indices, placements, J, q, v, drive, onset_rates, penetration, penetration_rate, normal_force, residual):
-    """:func:`probe_sites` and, if ``residual``, :func:`largest_residual` (else NaN), in one call: ``(code, max |Phi|)``."""
+def probe(work, indices, placements, J, q, v, drive_coefficients, x, onset_rates, penetration, penetration_rate, normal_force, residual):
+    """:func:`probe_sites` and, if ``residual``, :func:`largest_residual` (else NaN; the drive as in :func:`rhs_terms`),
+    in one call: ``(code, max |Phi|)``."""
     worst = np.nan
     if residual:
+        drive = _flat(work, indices, DRIVE)
+        power_series(drive_coefficients, x, drive)
         worst = largest_residual(
             placements, _flat(indices, indices, FRAMES_A), _flat(indices, indices, FRAMES_B), _flat(indices, indices, CLOSURE_ROWS), q, drive,
             _flat(indices, indices, ACTUATOR_Q),
