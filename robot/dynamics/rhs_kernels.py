@@ -490,9 +490,10 @@ def _packed_sites(work, indices, placements, J, v, onset_rates, tau):
 def finish_derivative(work, indices, multipliers, first_driving_row, v, qdd, configuration_rate, out):
     """``out = [q', qdd, actuator power, contact power]`` (:func:`write_powers`) after the KKT solve (one call).
 
-    ``configuration_rate``: Pinocchio's tangent map product (nq values); ``out``'s
-    entries after the two powers are not written.
+    ``configuration_rate``: Pinocchio's tangent map product (nq values; eigenpy hands a
+    one-value result over as 1 x 1); ``out``'s entries after the two powers are not written.
     """
+    configuration_rate = configuration_rate.reshape(configuration_rate.size)
     nq, nv = configuration_rate.shape[0], v.shape[0]
     for i in range(nq):
         out[i] = configuration_rate[i]
