@@ -736,7 +736,7 @@ def contact_probe(
         # compiled.tau receives the (unused) J^T w: every right-hand side starts by zeroing it
         if compiled.fused is not None:
             coefficients, x = workspace.drive.polynomial(t) if residual else _NO_DRIVE
-            code, worst = K.probe(compiled.work, compiled.indices, compiled.placements, compiled.jacobian, q, v, coefficients, x, onset_rates, pen, rate, force, residual)
+            code, worst = K.probe_terms(compiled.work, compiled.indices, compiled.placements, compiled.jacobian, q, v, coefficients, x, onset_rates, pen, rate, force, residual)
             if code != 0:
                 _raise_site_failure(dynamics, workspace, compiled, code, onset_rates, t)
             return Probe(pen, rate, worst, force)
