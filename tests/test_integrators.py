@@ -184,6 +184,27 @@ def test_placement_buffer_follows_pinocchio_data(misaligned):
             np.testing.assert_array_equal(view[k, 9:], data.oMf[k].translation)
 
 
+def test_packed_slots_are_the_compiled_terms_arrays(misaligned):
+    """Each slot of the packed buffers, read as the fused kernels read it, is the CompiledTerms array
+    of that name: the same values in the same memory (what one writes the other sees)."""
+    from robot.dynamics import rhs_kernels as K
+
+    compiled = D.make_workspace(misaligned.dynamics).compiled
+    slots = {
+        K.FRAMES_A: compiled.frames_a, K.FRAMES_B: compiled.frames_b, K.CLOSURE_ROWS: compiled.closure_rows,
+        K.ACTUATOR_Q: compiled.actuator_q, K.ACTUATOR_V: compiled.actuator_v, K.CLOSURE_MASKS: compiled.closure_masks,
+        K.SITE_TABLE: compiled.site_table, K.SITE_MASKS: compiled.site_masks, K.DRIFT: compiled.drift, K.TAU: compiled.tau,
+        K.LAW_PARAMETERS: compiled.site_parameters, K.LAW_OUTPUTS: compiled.site_outputs_buffer, K.SITE_TWISTS: compiled.site_twists,
+    }  # fmt: skip
+    for slot, array in slots.items():
+        assert array.size > 0, slot  # the scene has closures, actuators and compiled laws
+        buffer = compiled.indices if slot < K.DRIFT else compiled.work
+        read = {1: K._flat, 2: K._matrix, 3: K._cube}[array.ndim](buffer, compiled.indices, slot)
+        np.testing.assert_array_equal(read, array)
+        assert np.shares_memory(read, array), slot
+    np.testing.assert_array_equal(K._flat(compiled.work, compiled.indices, K.GAINS), [2.0 * misaligned.dynamics.baumgarte.alpha, misaligned.dynamics.baumgarte.beta**2])
+
+
 def test_compiled_sites_report_a_failing_law_with_its_message(misaligned):
     """A law that refuses its input inside the fused compiled call raises the law's own ContactError."""
     dynamics = misaligned.dynamics

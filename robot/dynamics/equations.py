@@ -222,7 +222,10 @@ class CompiledTerms:
     :func:`state_derivative` takes the Python path. Redundant rows are handled
     after the kernels: they write every row, :func:`solve_kkt` uses the independent ones. A contact law with a
     compiled ``kernel`` (``clearance_contact``'s laws) is evaluated inside the
-    compiled code; any other law through its ``evaluate``.
+    compiled code; any other law through its ``evaluate``. The arrays the kernels
+    read and write (but Pinocchio's and ``phi_q``) are views of two packed buffers,
+    ``indices`` and ``work`` (:func:`robot.dynamics.rhs_kernels.pack`): a right-hand
+    side is one compiled call before its KKT solve and one after.
     """
 
     def __init__(self, dynamics: DynamicsModel, data: pin.Data, kernel: C.ConstraintKernel):
@@ -232,84 +235,65 @@ class CompiledTerms:
         # views of Pinocchio's buffers; reshaped because eigenpy hands a 6 x 1 matrix (one-dof model) over as (6,)
         self.jacobian = data.J.reshape(6, model.nv)
         self.jacobian_rate = data.dJ.reshape(6, model.nv)
-        self.frames_a = np.array([c.frame_a for c in closures], dtype=np.int64)
-        self.frames_b = np.array([c.frame_b for c in closures], dtype=np.int64)
-        # closure i owns rows closure_rows[i]:closure_rows[i + 1] (3 spherical, 5 revolute); drivers after
-        self.closure_rows = np.array([rows.row for rows in dynamics.constraints.closures] + [kernel.n_closure_rows], dtype=np.int64)
-        self.closure_masks = K.support_mask(model, [f for c in closures for f in (c.frame_a, c.frame_b)])
         self.phi_q = kernel.phi_q  # driving rows written once by the kernel
+        # sizes as plain ints (a read of a Pinocchio property costs ~0.1 us)
+        self.model, self.nq, self.nq_nv, self.state_size = model, model.nq, model.nq + model.nv, dynamics.state_size
         self.n_closure_rows = kernel.n_closure_rows
         self.n_candidates = dynamics.n_candidates
-        self.drift = np.zeros(kernel.n_rows)
-        self.tau = np.zeros(model.nv)
-        self.actuator_q = np.asarray(dynamics.mechanism.actuator_q_index, dtype=np.int64)
-        self.actuator_v = np.asarray(dynamics.mechanism.actuator_v_index, dtype=np.int64)
-        if not kernel.driven:
-            self.actuator_q = self.actuator_v = np.zeros(0, dtype=np.int64)
-        compiled_law = self._build_sites(dynamics, model)
-        self.laws_compiled = all(compiled_law)
-        # every site in one compiled call (rhs_kernels.all_sites) when every law is a shipped compiled law
-        self.fused = None
-        if self.sites and self.laws_compiled and all(site.law_kernel in K.LAW_IDS for site in self.sites):
-            self._build_fused(dynamics)
-        self._build_output_views(dynamics)
-
-    def _build_sites(self, dynamics: DynamicsModel, model: pin.Model) -> list[bool]:
-        """One :class:`CompiledSite` per contact site; returns which sites' laws run compiled."""
-        # its masks, twists and output buffer are views of the packed arrays that all_sites reads
         laws = [contact.law for contact in dynamics.contacts]
         # compiled: a law whose type has a kernel id (known to rhs_kernels.law_kernel) and whose kernel
         # does everything (``law.kernel`` is None e.g. for a user-defined friction law); others: ``evaluate``
         compiled_law = [getattr(law, "KERNEL_ID", None) in K.LAW_IDS.values() and law.kernel is not None for law in laws]
+        self.laws_compiled = all(compiled_law)
+        # every site in the compiled calls (rhs_kernels.all_sites) when every law is a shipped compiled law
+        self.fused = K.all_sites if laws and self.laws_compiled and all(law.kernel in K.LAW_IDS for law in laws) else None
         sizes = [law.output_size if ok else 0 for law, ok in zip(laws, compiled_law)]
-        self.site_outputs_buffer = np.zeros(sum(sizes))
-        self.site_masks = np.zeros((len(laws), 2, model.nv), dtype=np.uint8)
-        self.site_twists = np.zeros((len(laws), 2, 6))
+        parameters = [np.asarray(law.kernel_parameters, dtype=float) if ok else np.zeros(0) for law, ok in zip(laws, compiled_law)]
+        table = _site_table(dynamics, sizes, [p.shape[0] for p in parameters]) if self.fused else np.zeros((0, K.SITE_COLUMNS))
+        actuators = (dynamics.mechanism.actuator_q_index, dynamics.mechanism.actuator_v_index) if kernel.driven else ((), ())
+        gains = dynamics.baumgarte
+        # closure i owns rows closure_rows[i]:closure_rows[i + 1] (3 spherical, 5 revolute); drivers after
+        self.indices, self.work, views = K.pack(
+            [
+                [c.frame_a for c in closures], [c.frame_b for c in closures],
+                [rows.row for rows in dynamics.constraints.closures] + [kernel.n_closure_rows], *actuators,
+                K.support_mask(model, [f for c in closures for f in (c.frame_a, c.frame_b)]), table,
+                np.array([K.support_mask(model, [c.site.outer_frame, c.site.inner_frame]) for c in dynamics.contacts]).reshape(len(laws), 2, model.nv),
+                _probe_gather(dynamics, table) if self.fused else np.zeros((0, 3)),
+            ],
+            [
+                np.zeros(kernel.n_rows), np.zeros(model.nv), [2.0 * gains.alpha, gains.beta * gains.beta], np.zeros(3 * len(actuators[0])),
+                np.concatenate([np.zeros(0), *parameters]), np.zeros(sum(sizes)), np.zeros((len(laws), 2, 6)),
+            ],
+        )  # fmt: skip
+        (
+            self.frames_a, self.frames_b, self.closure_rows, self.actuator_q, self.actuator_v, self.closure_masks, self.site_table,
+            self.site_masks, _, self.drift, self.tau, _, _, self.site_parameters, self.site_outputs_buffer, self.site_twists,
+        ) = views  # fmt: skip
+        self._build_sites(dynamics, compiled_law, sizes, parameters)
+        self._build_output_views(dynamics)
+
+    def _build_sites(self, dynamics: DynamicsModel, compiled_law: list[bool], sizes: list[int], parameters: list[np.ndarray]) -> None:
+        """One :class:`CompiledSite` per contact site: its parameters, masks, twists and outputs are views of the packed arrays."""
         self.sites = []
-        offset = 0
-        for index, (contact, ok, size) in enumerate(zip(dynamics.contacts, compiled_law, sizes)):
+        first_parameter = first_output = 0
+        for index, (contact, ok, size, n_parameters) in enumerate(zip(dynamics.contacts, compiled_law, sizes, (p.shape[0] for p in parameters))):
             law, site = contact.law, contact.site
-            self.site_masks[index] = K.support_mask(model, [site.outer_frame, site.inner_frame])
             self.sites.append(
                 CompiledSite(
                     law.kernel if ok else None,
-                    np.asarray(law.kernel_parameters, dtype=float) if ok else None,
+                    self.site_parameters[first_parameter : first_parameter + n_parameters] if ok else None,
                     self.site_masks[index],
                     site.outer_frame,
                     site.inner_frame,
                     contact.candidates,
                     self.site_twists[index],
-                    self.site_outputs_buffer[offset : offset + size] if ok else None,
+                    self.site_outputs_buffer[first_output : first_output + size] if ok else None,
                     law.WRENCH_OUTER if ok else 0,  # a Python law's wrenches are stacked [outer, inner]
                     law.WRENCH_INNER if ok else 6,
                 )
             )
-            offset += size
-        return compiled_law
-
-    def _build_fused(self, dynamics: DynamicsModel) -> None:
-        """The packed site table of :func:`robot.dynamics.rhs_kernels.all_sites` and the probe's gather indices."""
-        self.fused = K.all_sites
-        self.site_parameters = np.concatenate([site.parameters for site in self.sites])
-        table = np.zeros((len(self.sites), K.SITE_COLUMNS), dtype=np.int64)
-        first_parameter = first_output = 0
-        for row, (kernel, parameters, _, outer, inner, candidates, _, buffer, w_outer, w_inner) in zip(table, self.sites):
-            row[K.SITE_LAW] = K.LAW_IDS[kernel]
-            row[K.SITE_OUTER], row[K.SITE_INNER] = outer, inner
-            row[K.SITE_FIRST], row[K.SITE_LAST] = candidates.start, candidates.stop
-            row[K.SITE_PARAMETERS], row[K.SITE_PARAMETERS_END] = first_parameter, first_parameter + parameters.shape[0]
-            row[K.SITE_OUT], row[K.SITE_OUT_END] = first_output, first_output + buffer.shape[0]
-            row[K.SITE_WRENCH_OUTER], row[K.SITE_WRENCH_INNER] = w_outer, w_inner
-            first_parameter, first_output = first_parameter + parameters.shape[0], first_output + buffer.shape[0]
-        self.site_table = table
-        # per candidate: where its penetration, rate and normal force lie in the packed outputs (the probe)
-        gather = np.zeros((self.n_candidates, 3), dtype=np.int64)
-        for contact, row in zip(dynamics.contacts, table):
-            law, first = contact.law, row[K.SITE_OUT]
-            for j in range(law.n_candidates):
-                candidate = contact.candidates.start + j
-                gather[candidate] = (first + law.PENETRATION + j, first + law.PENETRATION_RATE + j, first + law.NORMAL_FORCE + j)
-        self.probe_gather = gather
+            first_parameter, first_output = first_parameter + n_parameters, first_output + size
 
     def _build_output_views(self, dynamics: DynamicsModel) -> None:
         # per site: candidate slice and views of its law's penetration, rate and normal force outputs
@@ -342,6 +326,33 @@ class CompiledTerms:
         if [rows.row for rows in constraints.closures] != offsets[:-1].tolist() or constraints.n_closure_rows != offsets[-1]:
             return None
         return cls(dynamics, data, kernel)
+
+
+def _site_table(dynamics: DynamicsModel, sizes: list[int], parameter_sizes: list[int]) -> np.ndarray:
+    """The site table of :func:`robot.dynamics.rhs_kernels.all_sites` (every law a shipped compiled law)."""
+    table = np.zeros((len(dynamics.contacts), K.SITE_COLUMNS), dtype=np.int64)
+    first_parameter = first_output = 0
+    for row, contact, size, n_parameters in zip(table, dynamics.contacts, sizes, parameter_sizes):
+        law, site = contact.law, contact.site
+        row[K.SITE_LAW] = K.LAW_IDS[law.kernel]
+        row[K.SITE_OUTER], row[K.SITE_INNER] = site.outer_frame, site.inner_frame
+        row[K.SITE_FIRST], row[K.SITE_LAST] = contact.candidates.start, contact.candidates.stop
+        row[K.SITE_PARAMETERS], row[K.SITE_PARAMETERS_END] = first_parameter, first_parameter + n_parameters
+        row[K.SITE_OUT], row[K.SITE_OUT_END] = first_output, first_output + size
+        row[K.SITE_WRENCH_OUTER], row[K.SITE_WRENCH_INNER] = law.WRENCH_OUTER, law.WRENCH_INNER
+        first_parameter, first_output = first_parameter + n_parameters, first_output + size
+    return table
+
+
+def _probe_gather(dynamics: DynamicsModel, table: np.ndarray) -> np.ndarray:
+    """Per candidate: where its penetration, rate and normal force lie in the packed law outputs (the probe)."""
+    gather = np.zeros((dynamics.n_candidates, 3), dtype=np.int64)
+    for contact, row in zip(dynamics.contacts, table):
+        law, first = contact.law, row[K.SITE_OUT]
+        for j in range(law.n_candidates):
+            candidate = contact.candidates.start + j
+            gather[candidate] = (first + law.PENETRATION + j, first + law.PENETRATION_RATE + j, first + law.NORMAL_FORCE + j)
+    return gather
 
 
 class DriveTable:
@@ -407,8 +418,11 @@ class DriveTable:
     def drive(self) -> Drive:
         return self._drive()
 
-    def values(self, t: float) -> np.ndarray:
-        """``[s, sd, sdd]`` at t as one new array (3 m values)."""
+    def polynomial(self, t: float) -> tuple[np.ndarray, float]:
+        """``(coefficients, x)``: ``[s, sd, sdd](t) = sum_k coefficients[k] x^k`` (:func:`robot.dynamics.rhs_kernels.power_series`).
+
+        On a segment evaluated exactly: the exact values as the only row, ``x = 0``.
+        """
         if not self._low <= t < self._high:  # not the segment of the previous call
             k = math.floor(t / self.width)
             segment = self.segments.get(k)
@@ -416,11 +430,16 @@ class DriveTable:
                 segment = self._build(k)
             self._last = segment
             self._low, self._high = k * self.width, (k + 1) * self.width
-        middle, coefficients, m = self._last
+        middle, coefficients, _ = self._last
         if coefficients is None:
-            return np.concatenate(self.drive.drive(t))
-        out = np.empty(3 * m)
-        K.power_series(coefficients, (t - middle) * self._to_unit, out)
+            return np.concatenate(self.drive.drive(t))[None, :], 0.0
+        return coefficients, (t - middle) * self._to_unit
+
+    def values(self, t: float) -> np.ndarray:
+        """``[s, sd, sdd]`` at t as one new array (3 m values)."""
+        coefficients, x = self.polynomial(t)
+        out = np.empty(coefficients.shape[1])
+        K.power_series(coefficients, x, out)
         return out
 
     def __call__(self, t: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -574,16 +593,16 @@ def state_derivative(
     when its cheap ``penetration()`` shows contact). Raises ``ContactError`` as
     :func:`evaluate` does.
     """
+    workspace.rhs_calls += 1
+    compiled = workspace.compiled
+    if compiled is not None:
+        return _compiled_state_derivative(dynamics, workspace, compiled, t, y, onset_rates)
     mechanism = dynamics.mechanism
     model, data = mechanism.model, workspace.data
     kernel = workspace.kernel
     nq, nv = model.nq, model.nv
-    workspace.rhs_calls += 1
     q = pin.normalize(model, y[:nq])  # a copy with unit quaternions
     v = y[nq : nq + nv]
-    compiled = workspace.compiled
-    if compiled is not None:
-        return _compiled_state_derivative(dynamics, workspace, compiled, t, q, v, onset_rates)
     s, sd, sdd = workspace.drive(t)
     pin.computeAllTerms(model, data, q, v)
     pin.updateFramePlacements(model, data)
@@ -626,71 +645,47 @@ def _compiled_state_derivative(
     workspace: DynamicsWorkspace,
     compiled: CompiledTerms,
     t: float,
-    q: np.ndarray,
-    v: np.ndarray,
+    y: np.ndarray,
     onset_rates: np.ndarray,
 ) -> np.ndarray:
     """:func:`state_derivative` through :mod:`robot.dynamics.rhs_kernels` (same equations)."""
-    model, data = dynamics.mechanism.model, workspace.data
-    nq, nv = model.nq, model.nv
-    drive = workspace.drive.values(t)
+    model, data, nq = compiled.model, workspace.data, compiled.nq
+    q = pin.normalize(model, y[:nq])  # a copy with unit quaternions
+    v = y[nq : compiled.nq_nv]
+    coefficients, x = workspace.drive.polynomial(t)
     # C++: M (CRBA), h (RNEA at zero acceleration), world joint Jacobians and their rates, frames
     pin.nonLinearEffects(model, data, q, v)
     pin.crba(model, data, q)
     pin.computeJointJacobiansTimeVariation(model, data, q, v)
     pin.updateFramePlacements(model, data)
-    gains = dynamics.baumgarte
-    placements, jacobian = compiled.placements, compiled.jacobian
-    K.closure_drift(
-        placements,
-        jacobian,
-        compiled.jacobian_rate,
-        compiled.closure_masks,
-        compiled.frames_a,
-        compiled.frames_b,
-        compiled.closure_rows,
-        q,
-        v,
-        drive,
-        compiled.actuator_q,
-        compiled.actuator_v,
-        2.0 * gains.alpha,
-        gains.beta * gains.beta,
-        compiled.phi_q,
-        compiled.drift,
-    )
-    tau = compiled.tau
-    tau[:] = 0.0
-    _compiled_sites(dynamics, workspace, compiled, t, v, onset_rates, tau)
-    out = np.empty(nq + nv + dynamics.n_work)
+    work, indices, phi_q, tau = compiled.work, compiled.indices, compiled.phi_q, compiled.tau
+    # the drive, closure rows and drift, tau = 0, and every site when all laws are shipped compiled laws
+    code = K.rhs_terms(work, indices, compiled.placements, compiled.jacobian, compiled.jacobian_rate, q, v, coefficients, x, onset_rates, phi_q)
+    if code != 0:
+        _raise_site_failure(dynamics, workspace, compiled, code, onset_rates, t)
+    if compiled.fused is None:
+        _compiled_sites(dynamics, workspace, compiled, t, v, onset_rates, tau)
+    out = np.empty(compiled.state_size)
     # force elements: data.oMi and data.J are at q (computeJointJacobiansTimeVariation)
-    total = tau if workspace.forces is None else tau + workspace.forces.evaluate(t, q, v)
-    out[nq : nq + nv] = solve_kkt(dynamics, workspace, total, compiled.phi_q, compiled.drift)
-    out[:nq] = pin.tangentMapProduct(model, q, v[:, None])
-    # actuator power: driving force (= Pinocchio's multiplier of the driving row) times the actuator rate
-    K.write_powers(data.lambda_c, workspace.rows.n_closure_kept, v, compiled.actuator_v, tau, out, nq + nv)
-    if workspace.forces is not None:
-        _add_force_powers(workspace.forces, out, nq + nv)
+    forces = workspace.forces
+    qdd = solve_kkt(dynamics, workspace, tau if forces is None else tau + forces.evaluate(t, q, v), phi_q, compiled.drift)
+    # [q', qdd, actuator power (driving force = Pinocchio's multiplier of the driving row, times the rate), contact power]
+    K.finish_derivative(work, indices, data.lambda_c, workspace.rows.n_closure_kept, v, qdd, pin.tangentMapProduct(model, q, v), out)
+    if forces is not None:
+        _add_force_powers(forces, out, compiled.nq_nv)
     return out
 
 
 def _compiled_sites(
     dynamics: DynamicsModel, workspace: DynamicsWorkspace, compiled: CompiledTerms, t: float, v: np.ndarray, onset_rates: np.ndarray, tau: np.ndarray
 ) -> None:
-    """Evaluate every clearance joint at the kinematics in ``workspace.data``; ``tau += J^T w`` (compiled path).
+    """Evaluate every clearance joint site by site at the kinematics in ``workspace.data``; ``tau += J^T w``.
 
-    Every law a shipped compiled law: one call of :func:`robot.dynamics.rhs_kernels.all_sites`
-    (each law's outputs in its buffer). Otherwise site by site, a law without a
-    compiled kernel through its ``evaluate``.
+    The compiled path where not every law is a shipped compiled law (otherwise the
+    compiled calls evaluate every site, :func:`robot.dynamics.rhs_kernels.all_sites`):
+    each law's outputs in its buffer, a law without a compiled kernel through its ``evaluate``.
     """
     placements, jacobian = compiled.placements, compiled.jacobian
-    if compiled.fused is not None:
-        code = compiled.fused(
-            placements, jacobian, v, onset_rates, tau, compiled.site_table, compiled.site_masks, compiled.site_parameters, compiled.site_outputs_buffer, compiled.site_twists
-        )
-        if code != 0:
-            _raise_site_failure(dynamics, workspace, compiled, code, onset_rates, t)
-        return
     for index, (law_kernel, parameters, masks, outer, inner, candidates, twists, buffer, w_outer, w_inner) in enumerate(compiled.sites):
         onset = onset_rates[candidates]
         views = workspace.sites[index]
@@ -719,6 +714,9 @@ def _raise_contact_error(dynamics: DynamicsModel, workspace: DynamicsWorkspace, 
     raise ContactError(f"contact law of {dynamics.contacts[index].site.name!r} failed (status {status}) at t={t!r}")
 
 
+_NO_DRIVE = (np.zeros((1, 0)), 0.0)  # the probe's drive polynomial when the residual is not asked for (not read)
+
+
 def contact_probe(
     dynamics: DynamicsModel, workspace: DynamicsWorkspace, t: float, q: np.ndarray, v: np.ndarray, onset_rates: np.ndarray, residual: bool = True
 ) -> Probe:
@@ -735,18 +733,16 @@ def contact_probe(
     if compiled is not None and compiled.laws_compiled:
         pin.computeJointJacobians(model, data, q)
         pin.updateFramePlacements(model, data)
-        worst = math.nan
-        if residual:
-            worst = K.largest_residual(compiled.placements, compiled.frames_a, compiled.frames_b, compiled.closure_rows, q, workspace.drive.values(t), compiled.actuator_q)
         # compiled.tau receives the (unused) J^T w: every right-hand side starts by zeroing it
         if compiled.fused is not None:
-            code = K.probe_sites(
-                compiled.placements, compiled.jacobian, v, onset_rates, compiled.tau, compiled.site_table, compiled.site_masks,
-                compiled.site_parameters, compiled.site_outputs_buffer, compiled.site_twists, compiled.probe_gather, pen, rate, force,
-            )  # fmt: skip
+            coefficients, x = workspace.drive.polynomial(t) if residual else _NO_DRIVE
+            code, worst = K.probe_terms(compiled.work, compiled.indices, compiled.placements, compiled.jacobian, q, v, coefficients, x, onset_rates, pen, rate, force, residual)
             if code != 0:
                 _raise_site_failure(dynamics, workspace, compiled, code, onset_rates, t)
             return Probe(pen, rate, worst, force)
+        worst = math.nan
+        if residual:
+            worst = K.largest_residual(compiled.placements, compiled.frames_a, compiled.frames_b, compiled.closure_rows, q, workspace.drive.values(t), compiled.actuator_q)
         _compiled_sites(dynamics, workspace, compiled, t, v, onset_rates, compiled.tau)
         for candidates, penetration, penetration_rate, normal_force in compiled.site_outputs:
             pen[candidates] = penetration

@@ -31,6 +31,13 @@ the kernel returns Pinocchio's ``drift = 2 alpha Phid + beta^2 Phi - gamma``
 (``robot.dynamics.equations`` for the sign convention). ``tests/test_integrators.py``
 checks all of it against the reference functions of ``robot.model.constraints``
 (Pinocchio's frame Jacobians and classical accelerations).
+
+Called from Python, a compiled function costs ~0.1 us per array argument
+(numba unboxes each one): so a right-hand side makes two calls,
+:func:`rhs_terms` before Pinocchio's KKT solve and :func:`finish_derivative`
+after it, and the step loop's probe one, :func:`probe_terms`, each on two
+packed buffers (:func:`pack`) instead of some twenty arrays; the functions
+they call are the building blocks above, unchanged.
 """
 
 from __future__ import annotations
@@ -306,9 +313,9 @@ def largest_residual(placements, frames_a, frames_b, closure_rows, q, drive, act
 
 @jit
 def power_series(coefficients, x, out):
-    """out[j] = sum_k coefficients[k, j] x^k (Horner's rule)."""
+    """out[j] = sum_k coefficients[k, j] x^k (Horner's rule), for every j of ``out``."""
     n = coefficients.shape[0]
-    for j in range(coefficients.shape[1]):
+    for j in range(out.shape[0]):
         value = coefficients[n - 1, j]
         for k in range(n - 2, -1, -1):
             value = value * x + coefficients[k, j]
@@ -399,3 +406,124 @@ def probe_sites(placements, J, v, onset_rates, tau, table, masks, parameters, ou
         penetration_rate[j] = outputs[gather[j, 1]]
         normal_force[j] = outputs[gather[j, 2]]
     return 0
+
+
+#: slots of the packed arrays of one compiled right-hand side (:func:`pack`, ``CompiledTerms``): int64 ...
+(
+    FRAMES_A, FRAMES_B, CLOSURE_ROWS, ACTUATOR_Q, ACTUATOR_V, CLOSURE_MASKS, SITE_TABLE, SITE_MASKS, PROBE_GATHER,
+) = range(9)  # fmt: skip
+#: ... then float64 (``GAINS`` = [2 alpha, beta^2]; ``DRIVE`` = [s, sd, sdd] of the driving rows, empty without)
+DRIFT, TAU, GAINS, DRIVE, LAW_PARAMETERS, LAW_OUTPUTS, SITE_TWISTS = range(9, 16)
+
+
+def pack(integers: list[np.ndarray], floats: list[np.ndarray]) -> tuple[np.ndarray, np.ndarray, list[np.ndarray]]:
+    """``(indices, work, views)``: the arrays (at most 3-D) copied into one int64 and one float64 buffer.
+
+    Why: numba unboxes every array argument of a compiled call (~0.1 us each), so
+    the fused kernels below take these two buffers instead of some twenty arrays.
+    ``indices`` starts with a header of 4 int64 per slot (``integers`` then
+    ``floats``, in the order of the slot constants above): the slot's offset in
+    its buffer and its shape padded with 1s; the int64 data follow the header.
+    ``views`` are views of the buffers shaped as the arrays (the caller keeps
+    them: writing one writes what the kernels read, and the other way round).
+    """
+    slots = [np.asarray(a, dtype=np.int64) for a in integers] + [np.asarray(a, dtype=np.float64) for a in floats]
+    header = 4 * len(slots)
+    sizes = [a.size for a in slots]
+    indices = np.zeros(header + sum(sizes[: len(integers)]), dtype=np.int64)
+    work = np.zeros(sum(sizes[len(integers) :]))
+    views, offsets = [], [header, 0]
+    for slot, array in enumerate(slots):
+        buffer, kind = (indices, 0) if slot < len(integers) else (work, 1)
+        start = offsets[kind]
+        indices[4 * slot : 4 * slot + 4] = [start, *array.shape, *(1,) * (3 - array.ndim)]
+        view = buffer[start : start + array.size].reshape(array.shape)
+        view[...] = array
+        views.append(view)
+        offsets[kind] += array.size
+    return indices, work, views
+
+
+@jit
+def _flat(buffer, indices, slot):
+    """Slot ``slot`` of a packed buffer (:func:`pack`), flat."""
+    start = indices[4 * slot]
+    return buffer[start : start + indices[4 * slot + 1] * indices[4 * slot + 2] * indices[4 * slot + 3]]
+
+
+@jit
+def _matrix(buffer, indices, slot):
+    return _flat(buffer, indices, slot).reshape((indices[4 * slot + 1], indices[4 * slot + 2]))
+
+
+@jit
+def _cube(buffer, indices, slot):
+    return _flat(buffer, indices, slot).reshape((indices[4 * slot + 1], indices[4 * slot + 2], indices[4 * slot + 3]))
+
+
+@jit
+def rhs_terms(work, indices, placements, J, dJ, q, v, drive_coefficients, x, onset_rates, phi_q):
+    """The compiled terms of one right-hand side before its KKT solve, in one call (packed arrays, :func:`pack`).
+
+    The ``DRIVE`` slot from the drive's polynomial (:func:`power_series`,
+    ``DriveTable.polynomial``), :func:`closure_drift` (``phi_q``'s closure rows and
+    the ``DRIFT`` slot), then ``TAU = 0`` and, for the sites of the ``SITE_TABLE``
+    slot (none when the laws are evaluated site by site), :func:`all_sites`, whose code it returns.
+    """
+    gains = _flat(work, indices, GAINS)
+    drive = _flat(work, indices, DRIVE)
+    power_series(drive_coefficients, x, drive)
+    closure_drift(
+        placements, J, dJ, _matrix(indices, indices, CLOSURE_MASKS), _flat(indices, indices, FRAMES_A), _flat(indices, indices, FRAMES_B),
+        _flat(indices, indices, CLOSURE_ROWS), q, v, drive, _flat(indices, indices, ACTUATOR_Q), _flat(indices, indices, ACTUATOR_V),
+        gains[0], gains[1], phi_q, _flat(work, indices, DRIFT),
+    )  # fmt: skip
+    tau = _flat(work, indices, TAU)
+    for c in range(tau.shape[0]):
+        tau[c] = 0.0
+    return _packed_sites(work, indices, placements, J, v, onset_rates, tau)
+
+
+@jit
+def _packed_sites(work, indices, placements, J, v, onset_rates, tau):
+    """:func:`all_sites` on the packed arrays."""
+    return all_sites(
+        placements, J, v, onset_rates, tau, _matrix(indices, indices, SITE_TABLE), _cube(indices, indices, SITE_MASKS),
+        _flat(work, indices, LAW_PARAMETERS), _flat(work, indices, LAW_OUTPUTS), _cube(work, indices, SITE_TWISTS),
+    )  # fmt: skip
+
+
+@jit
+def finish_derivative(work, indices, multipliers, first_driving_row, v, qdd, configuration_rate, out):
+    """``out = [q', qdd, actuator power, contact power]`` (:func:`write_powers`) after the KKT solve (one call).
+
+    ``configuration_rate``: Pinocchio's tangent map product (nq values; eigenpy hands a
+    one-value result over as 1 x 1); ``out``'s entries after the two powers are not written.
+    """
+    configuration_rate = configuration_rate.reshape(configuration_rate.size)
+    nq, nv = configuration_rate.shape[0], v.shape[0]
+    for i in range(nq):
+        out[i] = configuration_rate[i]
+    for i in range(nv):
+        out[nq + i] = qdd[i]
+    write_powers(multipliers, first_driving_row, v, _flat(indices, indices, ACTUATOR_V), _flat(work, indices, TAU), out, nq + nv)
+
+
+@jit
+def probe_terms(work, indices, placements, J, q, v, drive_coefficients, x, onset_rates, penetration, penetration_rate, normal_force, residual):
+    """:func:`probe_sites` and, if ``residual``, :func:`largest_residual` (else NaN; the drive as in :func:`rhs_terms`),
+    in one call: ``(code, max |Phi|)``."""
+    worst = np.nan
+    if residual:
+        drive = _flat(work, indices, DRIVE)
+        power_series(drive_coefficients, x, drive)
+        worst = largest_residual(
+            placements, _flat(indices, indices, FRAMES_A), _flat(indices, indices, FRAMES_B), _flat(indices, indices, CLOSURE_ROWS), q, drive,
+            _flat(indices, indices, ACTUATOR_Q),
+        )  # fmt: skip
+    code = probe_sites(
+        placements, J, v, onset_rates, _flat(work, indices, TAU), _matrix(indices, indices, SITE_TABLE), _cube(indices, indices, SITE_MASKS),
+        _flat(work, indices, LAW_PARAMETERS), _flat(work, indices, LAW_OUTPUTS), _cube(work, indices, SITE_TWISTS),
+        _matrix(indices, indices, PROBE_GATHER), penetration, penetration_rate, normal_force,
+    )  # fmt: skip
+    return code, worst

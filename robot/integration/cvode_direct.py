@@ -228,7 +228,9 @@ class DirectCVODE:
 
     def _rhs(self, t, y, ydot, user_data) -> int:
         try:
-            self._rhs_user(t, self._view(y), self._view(ydot))
+            arrays = self._arrays
+            # CVODE calls back with a handful of vectors: after the first calls, their views are cached
+            self._rhs_user(t, arrays[y] if y in arrays else self._view(y), arrays[ydot] if ydot in arrays else self._view(ydot))
             return 0
         except BaseException as exc:  # noqa: BLE001 - raised again by one_step (C cannot unwind Python)
             self._error = exc
