@@ -79,3 +79,15 @@ def test_table_lists_the_rounding_band_when_measured():
     report["rounding_band"] = {"band": {"peak S1": 1.2e-5, "steps": 3.5e-3}}
     text = RP.table(report)
     assert "| peak S1 | 1.2e-05 |" in text and "| steps | 3.5e-03 |" in text
+
+
+def test_bytecode_is_written_before_timing(tmp_path):
+    """The benchmark times what an installed package costs: the project's modules compiled and cached."""
+    import importlib.util
+    from pathlib import Path
+
+    import robot.run
+
+    cached = Path(importlib.util.cache_from_source(robot.run.__file__))
+    RP.compile_bytecode()
+    assert cached.is_file() and cached.stat().st_mtime >= Path(robot.run.__file__).stat().st_mtime
