@@ -89,5 +89,6 @@ def test_bytecode_is_written_before_timing(tmp_path):
     import robot.run
 
     cached = Path(importlib.util.cache_from_source(robot.run.__file__))
+    cached.unlink(missing_ok=True)
     RP.compile_bytecode()
     assert cached.is_file() and cached.stat().st_mtime >= Path(robot.run.__file__).stat().st_mtime
