@@ -137,7 +137,7 @@ class EventDrivenIntegrator:
         self.t, self.y = self.t0, system.normalise(np.asarray(y0, dtype=float))
         self.onset = np.full(system.n_candidates, ONSET_RATE_FLOOR)
         self.fun = derivative_or_inf(system, self.onset)  # reads the onset rates in place
-        self.records, self.events = Records(), []
+        self.records, self.events = Records(system.n_candidates), []
         self.outputs, self.progress = outputs, progress
         self.force_peaks = ForcePeaks(system, options, self.records) if locate_force_peaks else None
         self.counts = dict(steps=0, rejected=0, rhs=0, restarts=0, hidden=0, jacobians=0)
@@ -412,7 +412,7 @@ class EventDrivenIntegrator:
             self.record(t_out, self.system.normalise(dense(t_out)), R.RECORD_OUTPUT)
 
     def trajectory(self, status: int, cause: str | None, message: str, cpu_time: float, wall_time: float) -> Trajectory:
-        t, y, onset_rates, kind = self.records.arrays(self.system.n_candidates)
+        t, y, onset_rates, kind = self.records.arrays()
         counts = self.counts
         return Trajectory(
             status=status, message=message, cause=cause, t_end=float(t[-1]), t=t, y=y, onset_rates=onset_rates, kind=kind,
