@@ -266,8 +266,10 @@ class EventDrivenIntegrator:
         t_new, y_new = solver.t, solver.y
         self.accepted_here += 1
         self.counts["steps"] += 1
-        if not self.traits.fixed_step and solver.step_size is not None and solver.step_size < self.limits.min_step and t_new < self.t_final:
-            raise _Failure("step size collapse", f"t={t_new:.9g} s: step size {solver.step_size:.3e} s below {self.limits.min_step:.1e} s")
+        if not self.traits.fixed_step and t_new < self.t_final:
+            h = solver.step_size
+            if h is not None and h < self.limits.min_step:
+                raise _Failure("step size collapse", f"t={t_new:.9g} s: step size {h:.3e} s below {self.limits.min_step:.1e} s")
         if not all_finite(y_new):
             raise _Failure("non-finite state", f"t={t_new:.9g} s: the state is not finite")
         return _Step(solver.t_old, t_new, y_new, self.probe(t_new, y_new))

@@ -144,6 +144,7 @@ class OutputTimes:
         self._time_of, self._count, self._tolerance = time_of, count, tolerance
         self.index = 0
         self.taken: list[int] = []
+        self._next = self._time_at_index()
 
     @classmethod
     def grid(cls, step: float) -> "OutputTimes":
@@ -154,15 +155,20 @@ class OutputTimes:
         times = np.asarray(times, dtype=float)
         return cls(lambda k: float(times[k]), len(times), 0.0)
 
+    def _time_at_index(self) -> float:
+        """The output time at ``index``; NaN when none is left (it is never due)."""
+        return self._time_of(self.index) if self.index < self._count else math.nan
+
     def due(self, t_to: float) -> bool:
         """Is an output time at or before ``t_to`` still to be recorded?"""
-        return self.index < self._count and self._time_of(self.index) <= t_to + self._tolerance
+        return self._next <= t_to + self._tolerance
 
     def take(self, t_from: float, t_to: float) -> Iterator[float]:
         """The output times in [t_from, t_to] not yet recorded (each at most ``t_to``); earlier ones are skipped."""
         while self.due(t_to):
-            t_out = min(self._time_of(self.index), t_to)
+            t_out = min(self._next, t_to)
             if t_out >= t_from:
                 self.taken.append(self.index)
                 yield t_out
             self.index += 1
+            self._next = self._time_at_index()
