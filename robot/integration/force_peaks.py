@@ -192,15 +192,9 @@ class ForcePeaks:
         chain, forces = walked
         records_t = self.records.t
         left_end = max(records_t[chain[-1]], t_lo)
-        # local maxima p of the force in time (chain[p + 1] is before chain[p]): not below the force
-        # before, above the force after; the largest, the latest of equals
-        above_after = np.empty(len(chain) - 1, dtype=bool)
-        above_after[:1] = falling
-        above_after[1:] = forces[1:-1] > forces[:-2]
-        peaks = np.flatnonzero((forces[:-1] >= forces[1:]) & above_after)
-        if not peaks.size:
+        p = largest_local_maximum(forces, falling)
+        if p is None:
             return left_end, None
-        p = int(peaks[np.argmax(forces[peaks])])
         best = None
         intervals = [(chain[p + 1], chain[p])] + ([(chain[p], chain[p - 1])] if p >= 1 else [])
         for i_a, i_b in intervals:
@@ -217,6 +211,20 @@ class ForcePeaks:
                 if best is None or f_found > best[1]:
                     best = (t_found, f_found, segment, onset_rates)
         return left_end, best
+
+
+def largest_local_maximum(forces: np.ndarray, falling: bool) -> int | None:
+    """The largest local maximum of a force walked back in time (``forces[p + 1]`` before ``forces[p]``): its index, or None.
+
+    A local maximum is not below the force before it and above the force after it;
+    ``forces[0]``, with no force after it, is one when the force is ``falling``
+    after it and ``forces[-1]`` never is. Of equal maxima, the latest.
+    """
+    above_after = np.empty(forces.size - 1, dtype=bool)
+    above_after[:1] = falling
+    above_after[1:] = forces[1:-1] > forces[:-2]
+    peaks = np.flatnonzero((forces[:-1] >= forces[1:]) & above_after)
+    return int(peaks[np.argmax(forces[peaks])]) if peaks.size else None
 
 
 def sample_times(a: float, b: float, intervals: int) -> list[float]:
