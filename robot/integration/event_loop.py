@@ -34,7 +34,6 @@ with ``status`` -1, the ``cause`` and the records so far.
 
 from __future__ import annotations
 
-import math
 import time
 from typing import Callable, NamedTuple, Protocol
 
