@@ -34,7 +34,6 @@ with ``status`` -1, the ``cause`` and the records so far.
 
 from __future__ import annotations
 
-import math
 import time
 from typing import Callable, NamedTuple, Protocol
 
@@ -137,7 +136,7 @@ class EventDrivenIntegrator:
         self.t, self.y = self.t0, system.normalise(np.asarray(y0, dtype=float))
         self.onset = np.full(system.n_candidates, ONSET_RATE_FLOOR)
         self.fun = derivative_or_inf(system, self.onset)  # reads the onset rates in place
-        self.records, self.events = Records(), []
+        self.records, self.events = Records(system.n_candidates), []
         self.outputs, self.progress = outputs, progress
         self.force_peaks = ForcePeaks(system, options, self.records) if locate_force_peaks else None
         self.counts = dict(steps=0, rejected=0, rhs=0, restarts=0, hidden=0, jacobians=0)
@@ -266,8 +265,10 @@ class EventDrivenIntegrator:
         t_new, y_new = solver.t, solver.y
         self.accepted_here += 1
         self.counts["steps"] += 1
-        if not self.traits.fixed_step and solver.step_size is not None and solver.step_size < self.limits.min_step and t_new < self.t_final:
-            raise _Failure("step size collapse", f"t={t_new:.9g} s: step size {solver.step_size:.3e} s below {self.limits.min_step:.1e} s")
+        if not self.traits.fixed_step and t_new < self.t_final:
+            h = solver.step_size
+            if h is not None and h < self.limits.min_step:
+                raise _Failure("step size collapse", f"t={t_new:.9g} s: step size {h:.3e} s below {self.limits.min_step:.1e} s")
         if not all_finite(y_new):
             raise _Failure("non-finite state", f"t={t_new:.9g} s: the state is not finite")
         return _Step(solver.t_old, t_new, y_new, self.probe(t_new, y_new))
@@ -412,7 +413,7 @@ class EventDrivenIntegrator:
             self.record(t_out, self.system.normalise(dense(t_out)), R.RECORD_OUTPUT)
 
     def trajectory(self, status: int, cause: str | None, message: str, cpu_time: float, wall_time: float) -> Trajectory:
-        t, y, onset_rates, kind = self.records.arrays(self.system.n_candidates)
+        t, y, onset_rates, kind = self.records.arrays()
         counts = self.counts
         return Trajectory(
             status=status, message=message, cause=cause, t_end=float(t[-1]), t=t, y=y, onset_rates=onset_rates, kind=kind,

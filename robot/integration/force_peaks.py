@@ -31,7 +31,7 @@ from clearance_contact import ContactError
 from robot.integration import methods as registry
 from robot.integration.dense import HermiteDense
 from robot.integration.options import SolverOptions
-from robot.integration.records import BOUNDARY_KINDS, RECORD_START, Records
+from robot.integration.records import Records
 from robot.integration.solvers import make_solver
 
 
@@ -80,8 +80,8 @@ class ForcePeaks:
         ``edge``: -1 if the largest sample is the first one (the maximum may lie
         before ``a``), +1 if the last one (after ``b``), else 0.
         """
-        times = np.linspace(a, b, self.samples + 1)
-        forces = [self.force(float(tt), dense(tt), onset_rates, k) for tt in times]
+        times = sample_times(a, b, self.samples)
+        forces = [self.force(tt, dense(tt), onset_rates, k) for tt in times]
         i = int(np.argmax(forces))
         fun = lambda s: self.force(a + s, dense(a + s), onset_rates, k)  # noqa: E731 - in the offset from a: rounding relative to the step
         bracket = None
@@ -159,30 +159,25 @@ class ForcePeaks:
             return None  # the force only decreases over the phase searched: no maximum in it
         return float(t_best), self.system.normalise(dense_best(t_best)), float(f_best), onset_best.copy()
 
-    def _boundary_forces(self, k: int, t_old: float, t_lo: float, f_old: float) -> tuple[list[int], list[float]] | None:
-        """The boundary records from ``t_old`` back to the phase start, and candidate ``k``'s force at each.
+    def _boundary_forces(self, k: int, t_old: float, t_lo: float, f_old: float) -> tuple[np.ndarray, np.ndarray] | None:
+        """The boundary records from ``t_old`` back to the phase start (latest first), and candidate ``k``'s force at each.
 
-        The walk stops at the previous penetration maximum, the onset (zero force) or
-        the run's start; None when the records do not end at the step's start.
+        The force at ``t_old`` is ``f_old``, at the earlier records the one the step
+        loop probed there (the same contact law, same state). The walk stops at
+        (and includes) the previous penetration maximum, the onset (zero force),
+        the run's start (the first record), or its ``max_walk``-th record; None
+        when the records do not end at the step's start.
         """
-        records = self.records
-        chain, forces = [], []
-        for i in range(len(records) - 1, -1, -1):
-            if records.kind[i] not in BOUNDARY_KINDS:
-                continue
-            if not chain and records.t[i] != t_old:
-                return None  # the records do not end at the step's start: nothing to walk back over
-            if not chain:
-                f = f_old
-            elif records.force[i] is not None:  # probed by the step loop (the same contact law, same state)
-                f = float(records.force[i][k])
-            else:
-                f = self.force(records.t[i], records.y[i], records.onset[i], k)
-            chain.append(i)
-            forces.append(f)
-            if records.t[i] <= t_lo or records.kind[i] == RECORD_START or not f > 0 or len(chain) >= self.max_walk:
-                break
-        return chain, forces
+        index, times, all_forces = self.records.boundaries()
+        n = index.size
+        if not n or times[n - 1] != t_old:
+            return None  # the records do not end at the step's start: nothing to walk back over
+        back = slice(n - 1, None if n <= self.max_walk else n - 1 - self.max_walk, -1)
+        forces = all_forces[back, k].copy()  # the first entry is replaced
+        forces[0] = f_old
+        stops = (times[back] <= t_lo) | ~(forces > 0)
+        end = int(np.argmax(stops)) + 1 if stops.any() else forces.size
+        return index[back][:end], forces[:end]
 
     def _earlier(self, k: int, t_old: float, t_lo: float, f_old: float, falling: bool):
         """The compression phase's earlier steps: (left end searched, best (t, F, dense, onset) or None).
@@ -197,10 +192,9 @@ class ForcePeaks:
         chain, forces = walked
         records_t = self.records.t
         left_end = max(records_t[chain[-1]], t_lo)
-        peaks = [p for p in range(len(chain) - 1) if forces[p] >= forces[p + 1] and (forces[p] > forces[p - 1] if p > 0 else falling)]
-        if not peaks:
+        p = largest_local_maximum(forces, falling)
+        if p is None:
             return left_end, None
-        p = max(peaks, key=lambda p: forces[p])
         best = None
         intervals = [(chain[p + 1], chain[p])] + ([(chain[p], chain[p - 1])] if p >= 1 else [])
         for i_a, i_b in intervals:
@@ -217,6 +211,30 @@ class ForcePeaks:
                 if best is None or f_found > best[1]:
                     best = (t_found, f_found, segment, onset_rates)
         return left_end, best
+
+
+def largest_local_maximum(forces: np.ndarray, falling: bool) -> int | None:
+    """The largest local maximum of a force walked back in time (``forces[p + 1]`` before ``forces[p]``): its index, or None.
+
+    A local maximum is not below the force before it and above the force after it;
+    ``forces[0]``, with no force after it, is one when the force is ``falling``
+    after it and ``forces[-1]`` never is. Of equal maxima, the latest.
+    """
+    above_after = np.empty(forces.size - 1, dtype=bool)
+    above_after[:1] = falling
+    above_after[1:] = forces[1:-1] > forces[:-2]
+    peaks = np.flatnonzero((forces[:-1] >= forces[1:]) & above_after)
+    return int(peaks[np.argmax(forces[peaks])]) if peaks.size else None
+
+
+def sample_times(a: float, b: float, intervals: int) -> list[float]:
+    """``np.linspace(a, b, intervals + 1)`` as floats, the same numbers without its overhead (``a < b``).
+
+    numpy's sequence is ``j * step + a`` with ``step = (b - a) / intervals``, the
+    last point exactly ``b``.
+    """
+    step = (b - a) / intervals
+    return [j * step + a for j in range(intervals)] + [b]
 
 
 def parabolic_maximum(f, a: float, m: float, b: float, fa: float, fm: float, fb: float, xtol: float, maxiter: int = 60) -> tuple[float, float]:

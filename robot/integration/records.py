@@ -64,16 +64,31 @@ class Trajectory:
 
 
 class Records:
-    """The records of one run, in the order written; ``force`` keeps the normal forces the loop probed (else None)."""
+    """The records of one run, in the order written; ``force`` keeps the normal forces the loop probed (else None).
 
-    def __init__(self) -> None:
+    A boundary record (:data:`BOUNDARY_KINDS`) always carries its forces: the
+    force-peak search walks back over them (:mod:`robot.integration.force_peaks`),
+    through :meth:`boundaries`.
+    """
+
+    def __init__(self, n_candidates: int) -> None:
         self.t: list[float] = []
         self.y: list[np.ndarray] = []
         self.onset: list[np.ndarray] = []
         self.kind: list[int] = []
         self.force: list[np.ndarray | None] = []
+        self._boundary_rows: list[int] = []  # indices of the boundary records
+        # their index, time and forces as arrays, filled in their first `_converted` rows by `boundaries`
+        self._boundary_index = np.empty(0, dtype=np.intp)
+        self._boundary_t = np.empty(0)
+        self._boundary_force = np.empty((0, n_candidates))
+        self._converted = 0
 
     def add(self, t: float, y: np.ndarray, kind: int, onset_rates: np.ndarray, forces: np.ndarray | None = None) -> None:
+        if kind in BOUNDARY_KINDS:
+            if forces is None:
+                raise ValueError(f"a boundary record (kind {kind}) needs the normal forces probed at its state")
+            self._boundary_rows.append(len(self.t))
         self.t.append(t)
         self.y.append(np.array(y))
         self.onset.append(onset_rates.copy())
@@ -83,12 +98,35 @@ class Records:
     def __len__(self) -> int:
         return len(self.t)
 
-    def arrays(self, n_candidates: int) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    def boundaries(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """The boundary records in the order written: (record index, t, normal forces (rows: records)), views.
+
+        The arrays are extended by the records added since the last call (a few
+        hundred calls a run: cheaper than writing array rows at every step).
+        """
+        rows, done = self._boundary_rows, self._converted
+        total = len(rows)
+        if total > done:
+            if total > self._boundary_t.shape[0]:
+                capacity = max(2 * self._boundary_t.shape[0], total)
+                for name in ("_boundary_index", "_boundary_t", "_boundary_force"):
+                    old = getattr(self, name)
+                    grown = np.empty((capacity,) + old.shape[1:], dtype=old.dtype)
+                    grown[:done] = old[:done]
+                    setattr(self, name, grown)
+            new = rows[done:]
+            self._boundary_index[done:total] = new
+            self._boundary_t[done:total] = [self.t[i] for i in new]
+            self._boundary_force[done:total] = [self.force[i] for i in new]
+            self._converted = total
+        return self._boundary_index[:total], self._boundary_t[:total], self._boundary_force[:total]
+
+    def arrays(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         """(t, y, onset rates, kind) as arrays."""
         return (
             np.array(self.t),
             np.array(self.y),
-            np.array(self.onset).reshape(len(self.t), n_candidates),
+            np.array(self.onset).reshape(len(self.t), self._boundary_force.shape[1]),
             np.array(self.kind, dtype=np.int8),
         )
 
@@ -106,6 +144,7 @@ class OutputTimes:
         self._time_of, self._count, self._tolerance = time_of, count, tolerance
         self.index = 0
         self.taken: list[int] = []
+        self._next = self._time_at_index()
 
     @classmethod
     def grid(cls, step: float) -> "OutputTimes":
@@ -116,15 +155,20 @@ class OutputTimes:
         times = np.asarray(times, dtype=float)
         return cls(lambda k: float(times[k]), len(times), 0.0)
 
+    def _time_at_index(self) -> float:
+        """The output time at ``index``; NaN when none is left (it is never due)."""
+        return self._time_of(self.index) if self.index < self._count else math.nan
+
     def due(self, t_to: float) -> bool:
         """Is an output time at or before ``t_to`` still to be recorded?"""
-        return self.index < self._count and self._time_of(self.index) <= t_to + self._tolerance
+        return self._next <= t_to + self._tolerance
 
     def take(self, t_from: float, t_to: float) -> Iterator[float]:
         """The output times in [t_from, t_to] not yet recorded (each at most ``t_to``); earlier ones are skipped."""
         while self.due(t_to):
-            t_out = min(self._time_of(self.index), t_to)
+            t_out = min(self._next, t_to)
             if t_out >= t_from:
                 self.taken.append(self.index)
                 yield t_out
             self.index += 1
+            self._next = self._time_at_index()
