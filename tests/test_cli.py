@@ -228,16 +228,27 @@ def test_the_setup_is_spared_by_the_collector_and_the_caller_gets_its_collector_
         assert not gc.isenabled() and gc.get_freeze_count() == 0  # the caller's state, whatever happened
     finally:
         gc.enable()
+    gc.freeze()  # a caller that froze its own objects keeps them frozen
+    try:
+        frozen = gc.get_freeze_count()
+        with collector_spared_setup() as set_up:
+            set_up()
+        assert gc.get_freeze_count() >= frozen > 0
+    finally:
+        gc.unfreeze()
 
 
-def test_the_process_exit_keeps_the_exit_status_and_the_buffered_output():
+def test_the_process_exit_keeps_the_exit_status_the_buffered_output_and_atexit():
     import subprocess
     import sys
 
-    code = "import sys; from robot.cli.main import exit_process; print('buffered', end=''); sys.stderr.write('err'); exit_process(3)"
+    code = (
+        "import atexit, sys; from robot.cli.main import exit_process; atexit.register(lambda: sys.stderr.write(' atexit'));"
+        "print('buffered', end=''); sys.stderr.write('err'); exit_process(3)"
+    )
     environment = {key: value for key, value in os.environ.items() if key != "PYTHONUNBUFFERED"}  # stdout block-buffered
     done = subprocess.run([sys.executable, "-c", code], cwd=ROOT, env=environment, capture_output=True, text=True, timeout=60)
-    assert (done.returncode, done.stdout, done.stderr) == (3, "buffered", "err")
+    assert (done.returncode, done.stdout, done.stderr) == (3, "buffered", "err atexit")
 
 
 def test_a_failed_write_saves_the_result_to_a_temporary_folder_named_in_the_message(capsys, tmp_path):

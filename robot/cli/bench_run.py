@@ -39,7 +39,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "--rounding-band",
         action="store_true",
         help="also measure the scene's rounding band: how far peak forces, impulses and the step count move under 1-ulp "
-        "perturbations (7 more runs; robot.analysis.studies.rounding_band); the yardstick for 'physics unchanged'",
+        "perturbations (up to 7 more runs; robot.analysis.studies.rounding_band); the yardstick for 'physics unchanged'",
     )
 
 

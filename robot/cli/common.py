@@ -131,6 +131,7 @@ def collector_spared_setup() -> Iterator[Callable[[], None]]:
     block ends: it did not change the peak memory of ``clearance run``.
     """
     enabled = gc.isenabled()
+    frozen_before = gc.get_freeze_count()
     gc.disable()
 
     def set_up() -> None:
@@ -141,7 +142,8 @@ def collector_spared_setup() -> Iterator[Callable[[], None]]:
     try:
         yield set_up
     finally:
-        gc.unfreeze()
+        if frozen_before == 0:  # a caller's own frozen objects stay frozen
+            gc.unfreeze()
         if enabled:
             gc.enable()
 

@@ -9,21 +9,27 @@ two runs that are both correct to rounding differ in their peak forces and
 impulses by far more than 1e-16. This module measures that spread for a scene:
 the same run repeated with
 
-* one coordinate of the initial state nudged by one unit in the last place
-  (``numpy.nextafter``), for a few coordinates (positions and velocities);
+* one coordinate of the initial state moved by one unit in the last place of
+  its block's scale (``numpy.spacing`` of the largest magnitude among the
+  positions, or among the velocities: one ulp of a coordinate that is zero or
+  nearly zero would be ~1e-300, far below what rounding does to it), for a
+  few coordinates; a block that is all zero (a start at rest) has no scale and
+  is not nudged;
 * the relative and the absolute tolerance multiplied by ``1 + 1e-12`` (the
   step-size controller's decisions move at rounding level);
 
 and, per summary quantity (peak normal force and normal-force impulse per
 clearance joint, as :func:`robot.analysis.studies.common.simulate` defines them,
 and the number of accepted steps), the largest relative change against the
-unperturbed run: the **rounding band**. A code change whose summary differs
+unperturbed run: the **rounding band**. It is the largest of a handful of
+samples, so an estimate from below of how far rounding can move a quantity, not
+a bound; the report says how many variants moved anything at all. A code change whose summary differs
 from the old code's by less than the band is indistinguishable from rounding;
 one that stays bit for bit identical differs by zero. The band also answers
 whether a criterion is meaningful at all: on ``compound_misaligned`` (2 s,
 CVODE_BDF rtol 1e-6) it is ~1e-5 for the peak forces and ~5e-6 for the
-impulses, so "peaks within 1e-6 of today's run" can only hold bit for bit
-(``docs/performance.md``).
+impulses, so "peaks within 1e-6 of today's run" cannot be guaranteed short of
+bit identity (``docs/performance.md``).
 """
 
 from __future__ import annotations
@@ -33,6 +39,7 @@ from typing import Callable
 
 import numpy as np
 
+from robot.analysis.errors import AnalysisError
 from robot.analysis.studies.common import Outcome, simulate
 from robot.integration.simulation import SolverOptions
 from robot.run import Run
@@ -63,23 +70,30 @@ def relative_changes(reference: dict[str, float], other: dict[str, float]) -> di
 def perturbations(run: Run, options: SolverOptions, coordinates: tuple[int, ...] | None = None) -> dict[str, tuple[Run, SolverOptions]]:
     """The perturbed variants of a run (module docstring), by name.
 
-    ``coordinates``: indices of the initial state to nudge by one unit in the last
-    place (default: the first and the middle position coordinate, the first and
-    the middle velocity coordinate).
+    ``coordinates``: indices of the initial state to nudge (default: the first and
+    the middle position coordinate, the first and the middle velocity coordinate);
+    each moves by one ulp of its block's scale. Indices of the integrator's extra
+    states (the works) or of an all-zero block are skipped.
     """
     nq, nv = run.mechanism.model.nq, run.mechanism.model.nv
     if coordinates is None:
         coordinates = tuple(sorted({0, nq // 2, nq, nq + nv // 2}))
+    blocks = (slice(0, nq), slice(nq, nq + nv))
     variants = {}
     for index in coordinates:
         if not 0 <= index < run.y0.shape[0]:
-            raise ValueError(f"coordinates: index {index} is outside the state (0 ... {run.y0.shape[0] - 1})")
+            raise AnalysisError(f"coordinates: index {index} is outside the state (0 ... {run.y0.shape[0] - 1})")
+        block = next((b for b in blocks if b.start <= index < b.stop), None)
+        scale = 0.0 if block is None else float(np.max(np.abs(run.y0[block])))
+        if scale == 0.0:
+            continue
+        nudge = float(np.spacing(scale))
         y0 = run.y0.copy()
-        y0[index] = np.nextafter(y0[index], np.inf)
-        variants[f"y0[{index}] + 1 ulp"] = (dataclasses.replace(run, y0=y0), options)
-    nudge = 1.0 + TOLERANCE_NUDGE
-    variants[f"rtol x (1 + {TOLERANCE_NUDGE:g})"] = (run, dataclasses.replace(options, rtol=options.rtol * nudge))
-    variants[f"atol x (1 + {TOLERANCE_NUDGE:g})"] = (run, dataclasses.replace(options, atol=options.atol * nudge))
+        y0[index] += nudge
+        variants[f"y0[{index}] + {nudge:.1e}"] = (dataclasses.replace(run, y0=y0), options)
+    factor = 1.0 + TOLERANCE_NUDGE
+    variants[f"rtol x (1 + {TOLERANCE_NUDGE:g})"] = (run, dataclasses.replace(options, rtol=options.rtol * factor))
+    variants[f"atol x (1 + {TOLERANCE_NUDGE:g})"] = (run, dataclasses.replace(options, atol=options.atol * factor))
     return variants
 
 
@@ -92,8 +106,9 @@ def rounding_band(
 ) -> dict:
     """The rounding band of a run (module docstring): reference summary, each variant's changes, the band.
 
-    Raises ``RuntimeError`` if the reference or a variant does not reach ``t_end``
-    (a band of a failed run means nothing).
+    ``moved``: how many variants changed any quantity at all. Raises
+    :class:`robot.analysis.errors.AnalysisError` if the reference or a variant does
+    not reach ``t_end`` (a band of a failed run means nothing).
     """
     options = options or run.scene.solver
     t_end = run.t_span[1] if t_end is None else t_end
@@ -101,7 +116,7 @@ def rounding_band(
     def summarised(variant_run: Run, variant_options: SolverOptions, label: str) -> dict[str, float]:
         outcome = simulate(variant_run, variant_options, t_end, label=label)
         if not outcome.success:
-            raise RuntimeError(f"rounding band of {run.scene.name!r}: the {label} run stopped at t={outcome.t_reached!r} ({outcome.message})")
+            raise AnalysisError(f"rounding band of {run.scene.name!r}: the {label} run stopped at t={outcome.t_reached!r} ({outcome.message})")
         return summary(outcome)
 
     reference = summarised(run, options, "reference")
@@ -111,4 +126,5 @@ def rounding_band(
         if progress is not None:
             progress(f"{name}: " + ", ".join(f"{key} {value:.1e}" for key, value in variants[name].items()))
     band = {name: max(changes[name] for changes in variants.values()) for name in reference}
-    return {"scene": run.scene.name, "t_end": t_end, "reference": reference, "variants": variants, "band": band}
+    moved = sum(1 for changes in variants.values() if any(value != 0.0 for value in changes.values()))
+    return {"scene": run.scene.name, "t_end": t_end, "reference": reference, "variants": variants, "band": band, "moved": moved}
