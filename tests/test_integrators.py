@@ -14,6 +14,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import warnings
 from pathlib import Path
@@ -23,7 +24,7 @@ import pinocchio as pin
 import pytest
 
 from clearance_contact import ContactError
-from robot.errors import RedundantConstraintWarning
+from robot.errors import DriveError, Error, RedundantConstraintWarning
 from robot.model.description import CLOSURE_TYPES
 from robot.model import constraints as C
 from robot.dynamics import equations as D
@@ -214,6 +215,22 @@ def test_compiled_sites_report_a_failing_law_with_its_message(misaligned):
     y[dynamics.nq + dynamics.nv - 1] = np.nan  # a non-finite velocity reaches the contact laws
     with pytest.raises(ContactError, match="non-finite"):
         D.state_derivative(dynamics, workspace, 0.0, y, np.full(dynamics.n_candidates, 0.1))
+
+
+@pytest.mark.parametrize("change", [-1, 1])
+def test_a_drive_with_the_wrong_number_of_values_is_refused(misaligned, change):
+    """4 or 6 values for the 5 actuators: the workspace refuses the drive (the compiled calls would read past it)."""
+
+    class Resized:
+        def drive(self, t):
+            values = misaligned.dynamics.drive.drive(t)
+            return tuple(np.resize(a, a.size + change) for a in values)
+
+    dynamics = dataclasses.replace(misaligned.dynamics, drive=Resized())
+    assert len(dynamics.mechanism.actuator_q_index) == 5
+    with pytest.raises(DriveError, match=rf"returns \[{5 + change}, {5 + change}, {5 + change}\] values .* has 5 motion-driven") as caught:
+        D.make_workspace(dynamics)
+    assert isinstance(caught.value, Error) and caught.value.key == "drive"
 
 
 def test_compiled_right_hand_side_runs_as_plain_python():

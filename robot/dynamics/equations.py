@@ -55,6 +55,7 @@ import pinocchio as pin
 from clearance_contact import ContactError, SphericalClearanceJoint
 
 from robot.dynamics.baumgarte import Baumgarte
+from robot.errors import DriveError
 from robot.dynamics.probe import Probe
 from robot.model import constraints as C
 from robot.model import redundancy as R
@@ -179,6 +180,8 @@ class DynamicsWorkspace:
 
 
 def make_workspace(dynamics: DynamicsModel) -> DynamicsWorkspace:
+    """The per-run state of ``dynamics``; raises :class:`robot.errors.DriveError` if its drive does not fit the mechanism."""
+    check_drive_size(dynamics)
     model = dynamics.mechanism.model
     data = model.createData()
     kernel = C.ConstraintKernel(dynamics.constraints, data)
@@ -191,6 +194,25 @@ def make_workspace(dynamics: DynamicsModel) -> DynamicsWorkspace:
         compiled=CompiledTerms.for_dynamics(dynamics, data, kernel),
         forces=None if dynamics.forces is None else dynamics.forces.bind(model, data),
     )
+
+
+def check_drive_size(dynamics: DynamicsModel) -> None:
+    """Raise :class:`robot.errors.DriveError` unless the drive gives one value of s, sd and sdd per motion actuator.
+
+    Checked once, at t = 0, when a workspace is made: the compiled right-hand side reads
+    the drive's values without bounds checks (:func:`robot.dynamics.rhs_kernels.power_series`).
+    """
+    mechanism = dynamics.mechanism
+    expected = len(mechanism.actuator_q_index) if dynamics.constraints.driven else 0
+    sizes = [np.size(values) for values in dynamics.drive.drive(0.0)]
+    if sizes != [expected] * 3:
+        raise DriveError(
+            f"the drive {type(dynamics.drive).__name__} returns {sizes} values of (s, sd, sdd) at t=0 but the mechanism "
+            f"has {expected} motion-driven actuators {list(mechanism.actuated_joints)}: give the drive one value of s, "
+            "sd and sdd per motion actuator, in that order",
+            key="drive",
+            value=sizes,
+        )
 
 
 class CompiledSite(NamedTuple):
