@@ -217,6 +217,24 @@ def test_compiled_sites_report_a_failing_law_with_its_message(misaligned):
         D.state_derivative(dynamics, workspace, 0.0, y, np.full(dynamics.n_candidates, 0.1))
 
 
+@pytest.mark.parametrize("call", ["state_derivative", "contact_probe"])
+def test_a_failing_law_names_its_site_and_time(misaligned, call):
+    """NaN onset rates on the second clearance joint (R1): the error names R1, t and the law's own reason."""
+    dynamics = misaligned.dynamics
+    workspace = D.make_workspace(dynamics)
+    assert workspace.compiled.fused is not None and [c.site.name for c in dynamics.contacts] == ["S1", "R1"]
+    y = np.concatenate([misaligned.y0, [0.0, 0.0]])
+    onset = np.full(dynamics.n_candidates, 0.1)
+    onset[dynamics.contacts[1].candidates] = np.nan
+    q, v = y[: dynamics.nq], y[dynamics.nq : dynamics.nq + dynamics.nv]
+    with pytest.raises(ContactError, match=r"^contact law of 'R1' failed at t=0\.25: non-finite input onset_rates=\[nan") as caught:
+        if call == "state_derivative":
+            D.state_derivative(dynamics, workspace, 0.25, y, onset)
+        else:
+            D.contact_probe(dynamics, workspace, 0.25, q, v, onset)
+    assert isinstance(caught.value.__cause__, ContactError)  # the law's own error, chained
+
+
 @pytest.mark.parametrize("change", [-1, 1])
 def test_a_drive_with_the_wrong_number_of_values_is_refused(misaligned, change):
     """4 or 6 values for the 5 actuators: the workspace refuses the drive (the compiled calls would read past it)."""

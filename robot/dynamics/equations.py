@@ -730,10 +730,14 @@ def _raise_site_failure(dynamics: DynamicsModel, workspace: DynamicsWorkspace, c
 
 
 def _raise_contact_error(dynamics: DynamicsModel, workspace: DynamicsWorkspace, index: int, twists, onset, t: float, status: int):
-    """A compiled law returned ``status != 0``: raise its ``evaluate``'s informative ``ContactError``."""
-    views = workspace.sites[index]
-    views.law.evaluate(views.outer_rotation, views.outer_position, twists[0], views.inner_rotation, views.inner_position, twists[1], onset)
-    raise ContactError(f"contact law of {dynamics.contacts[index].site.name!r} failed (status {status}) at t={t!r}")
+    """A compiled law returned ``status != 0``: raise a ``ContactError`` naming the site and t, with the message
+    of the law's ``evaluate`` (its informative error on the same input) when it raises one."""
+    views, name = workspace.sites[index], dynamics.contacts[index].site.name
+    try:
+        views.law.evaluate(views.outer_rotation, views.outer_position, twists[0], views.inner_rotation, views.inner_position, twists[1], onset)
+    except ContactError as exc:
+        raise ContactError(f"contact law of {name!r} failed at t={t!r}: {exc}", key=exc.key, value=exc.value) from exc
+    raise ContactError(f"contact law of {name!r} failed (status {status}) at t={t!r}")
 
 
 _NO_DRIVE = (np.zeros((1, 0)), 0.0)  # the probe's drive polynomial when the residual is not asked for (not read)
