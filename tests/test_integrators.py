@@ -190,27 +190,61 @@ def test_packed_slots_are_the_compiled_terms_arrays(misaligned):
     of that name: the same values in the same memory (what one writes the other sees)."""
     from robot.dynamics import rhs_kernels as K
 
-    compiled = D.make_workspace(misaligned.dynamics).compiled
+    dynamics = misaligned.dynamics
+    compiled = D.make_workspace(dynamics).compiled
     slots = {
         K.FRAMES_A: compiled.frames_a, K.FRAMES_B: compiled.frames_b, K.CLOSURE_ROWS: compiled.closure_rows,
         K.ACTUATOR_Q: compiled.actuator_q, K.ACTUATOR_V: compiled.actuator_v, K.CLOSURE_MASKS: compiled.closure_masks,
-        K.SITE_TABLE: compiled.site_table, K.SITE_MASKS: compiled.site_masks, K.DRIFT: compiled.drift, K.TAU: compiled.tau,
+        K.SITE_TABLE: compiled.site_table, K.SITE_MASKS: compiled.site_masks, K.PROBE_GATHER: compiled.probe_gather,
+        K.DRIFT: compiled.drift, K.TAU: compiled.tau, K.GAINS: compiled.gains, K.DRIVE: compiled.drive_values,
         K.LAW_PARAMETERS: compiled.site_parameters, K.LAW_OUTPUTS: compiled.site_outputs_buffer, K.SITE_TWISTS: compiled.site_twists,
     }  # fmt: skip
+    assert sorted(slots) == list(range(K.N_SLOTS))
     for slot, array in slots.items():
         assert array.size > 0, slot  # the scene has closures, actuators and compiled laws
         buffer = compiled.indices if slot < K.DRIFT else compiled.work
         read = {1: K._flat, 2: K._matrix, 3: K._cube}[array.ndim](buffer, compiled.indices, slot)
         np.testing.assert_array_equal(read, array)
         assert np.shares_memory(read, array), slot
-    np.testing.assert_array_equal(K._flat(compiled.work, compiled.indices, K.GAINS), [2.0 * misaligned.dynamics.baumgarte.alpha, misaligned.dynamics.baumgarte.beta**2])
+    gains = dynamics.baumgarte
+    np.testing.assert_array_equal(compiled.gains, [2.0 * gains.alpha, gains.beta**2])
+    assert compiled.drive_values.shape == (3 * 5,) and compiled.probe_gather.shape == (dynamics.n_candidates, 3)
+
+
+def test_pack_keeps_empty_slots_in_place():
+    """Empty slots (no closure, no site: shapes (0,), (0, 3), (0, 2, nv)) read back empty with their shapes,
+    and the slots after them keep their values; a missing slot is refused."""
+    from robot.dynamics import rhs_kernels as K
+
+    nv = 7
+    rng = np.random.default_rng(8)
+    empty = {
+        K.FRAMES_A: np.zeros(0), K.PROBE_GATHER: np.zeros((0, 3)), K.SITE_MASKS: np.zeros((0, 2, nv)), K.SITE_TWISTS: np.zeros((0, 2, 6))
+    }  # fmt: skip
+    arrays = {
+        slot: empty.get(slot, rng.integers(-9, 9, size=(slot % 3 + 1, 2)) if slot < K.DRIFT else rng.standard_normal(slot))
+        for slot in range(K.N_SLOTS)
+    }
+    indices, work, views = K.pack(arrays)
+    assert sorted(views) == list(range(K.N_SLOTS))
+    for slot, array in arrays.items():
+        buffer = indices if slot < K.DRIFT else work
+        assert views[slot].dtype == (np.int64 if slot < K.DRIFT else np.float64)
+        assert views[slot].shape == np.shape(array)
+        read = {1: K._flat, 2: K._matrix, 3: K._cube}[np.ndim(array)](buffer, indices, slot)
+        assert read.shape == np.shape(array), slot
+        np.testing.assert_array_equal(read, array)
+    assert indices.size == 4 * K.N_SLOTS + sum(np.size(arrays[s]) for s in range(K.DRIFT))
+    assert work.size == sum(np.size(arrays[s]) for s in range(K.DRIFT, K.N_SLOTS))
+    with pytest.raises(ValueError, match=rf"missing slots \[{K.GAINS}\]"):
+        K.pack({slot: array for slot, array in arrays.items() if slot != K.GAINS})
 
 
 def test_compiled_sites_report_a_failing_law_with_its_message(misaligned):
     """A law that refuses its input inside the fused compiled call raises the law's own ContactError."""
     dynamics = misaligned.dynamics
     workspace = D.make_workspace(dynamics)
-    assert workspace.compiled.fused is not None
+    assert workspace.compiled.sites_fused
     y = np.concatenate([misaligned.y0, [0.0, 0.0]])
     y[dynamics.nq + dynamics.nv - 1] = np.nan  # a non-finite velocity reaches the contact laws
     with pytest.raises(ContactError, match="non-finite"):
@@ -222,7 +256,7 @@ def test_a_failing_law_names_its_site_and_time(misaligned, call):
     """NaN onset rates on the second clearance joint (R1): the error names R1, t and the law's own reason."""
     dynamics = misaligned.dynamics
     workspace = D.make_workspace(dynamics)
-    assert workspace.compiled.fused is not None and [c.site.name for c in dynamics.contacts] == ["S1", "R1"]
+    assert workspace.compiled.sites_fused and [c.site.name for c in dynamics.contacts] == ["S1", "R1"]
     y = np.concatenate([misaligned.y0, [0.0, 0.0]])
     onset = np.full(dynamics.n_candidates, 0.1)
     onset[dynamics.contacts[1].candidates] = np.nan
