@@ -286,8 +286,67 @@ def test_a_drive_with_the_wrong_number_of_values_is_refused(misaligned, change):
 
 
 def test_compiled_right_hand_side_runs_as_plain_python():
-    """``CLEARANCE_CONTACT_JIT=0``: the kernels of ``robot.dynamics.rhs_kernels`` run as Python, same answers."""
-    assert_passes_as_plain_python(__file__, "state_derivative_equals_reference or placement_buffer", 2 * len(RHS_SCENES) + 1)
+    """``CLEARANCE_CONTACT_JIT=0``: the kernels of ``robot.dynamics.rhs_kernels`` run as Python, same answers
+    (the right-hand side, the probe with and without its residual, an exact drive segment)."""
+    selection = "state_derivative_equals_reference or placement_buffer or probe_without_residual or exact_drive_segment"
+    assert_passes_as_plain_python(__file__, selection, 2 * len(RHS_SCENES) + 3)
+
+
+def test_probe_without_residual_gives_the_same_contacts(misaligned):
+    """``contact_probe(residual=False)``: the same penetrations, rates and normal forces bit for bit, residual NaN."""
+    dynamics = misaligned.dynamics
+    workspace = D.make_workspace(dynamics)
+    assert workspace.compiled.sites_fused
+    nq, nv = dynamics.nq, dynamics.nv
+    touched = 0
+    for t, y, onset in _random_states(misaligned, np.random.default_rng(21), 30):
+        q, v = D.normalise_quaternions(dynamics.mechanism, y[:nq]), y[nq : nq + nv]
+        try:
+            full = D.contact_probe(dynamics, workspace, t, q, v, onset)
+        except ContactError:
+            continue
+        quick = D.contact_probe(dynamics, workspace, t, q, v, onset, residual=False)
+        assert math.isnan(quick.residual) and math.isfinite(full.residual) and full.residual > 0.0
+        for name in ("penetration", "penetration_rate", "normal_force"):
+            np.testing.assert_array_equal(getattr(quick, name), getattr(full, name), err_msg=name)
+        touched += bool(np.any(full.normal_force > 0.0))
+    assert touched >= 3  # states in contact, not only zero forces
+
+
+def test_exact_drive_segment_reaches_the_compiled_calls_bit_for_bit(misaligned):
+    """Where the drive table cannot fit the drive (a kink), the compiled right-hand side and probe
+    read the drive's own values, bit for bit, and the probe's residual is computed from them."""
+    from robot.dynamics import rhs_kernels as K
+
+    class Kinked:
+        """The scene's drive plus a kink of 1 mm/s slope change at t = 0.7 s on every actuator."""
+
+        def drive(self, t):
+            s, sd, sdd = misaligned.dynamics.drive.drive(t)
+            return s + 1e-3 * abs(t - 0.7), sd + 1e-3 * math.copysign(1.0, t - 0.7), sdd.copy()
+
+    dynamics = dataclasses.replace(misaligned.dynamics, drive=Kinked())
+    workspace = D.make_workspace(dynamics)
+    compiled, table = workspace.compiled, workspace.drive
+    nq, nv = dynamics.nq, dynamics.nv
+    y = np.concatenate([misaligned.y0, [0.0, 0.0]])
+    q, v = D.normalise_quaternions(dynamics.mechanism, y[:nq]), y[nq : nq + nv]
+    onset = np.full(dynamics.n_candidates, 0.1)
+    for t in (0.7 - 0.01, 0.7 + 1e-3, 0.2):  # two times in the kinked segment, one in a smooth one
+        exact = np.concatenate(dynamics.drive.drive(t))
+        compiled.drive_values[:] = np.nan
+        D.state_derivative(dynamics, workspace, t, y, onset)
+        from_rhs = compiled.drive_values.copy()
+        compiled.drive_values[:] = np.nan
+        probe = D.contact_probe(dynamics, workspace, t, q, v, onset)
+        np.testing.assert_array_equal(compiled.drive_values, from_rhs)
+        worst = K.largest_residual(compiled.placements, compiled.frames_a, compiled.frames_b, compiled.closure_rows, q, from_rhs, compiled.actuator_q)
+        assert probe.residual == worst
+        if t == 0.2:  # the table's polynomial: within its tolerance, not the drive's rounding
+            np.testing.assert_allclose(from_rhs, exact, rtol=0, atol=1e-12 * np.max(np.abs(exact)))
+        else:
+            np.testing.assert_array_equal(from_rhs, exact)
+    assert table.exact_segments == 1 and table.segments[math.floor(0.7 / table.width)][1] is None
 
 
 def test_state_derivative_contact_hint_does_not_change_the_result(misaligned):
