@@ -50,6 +50,10 @@ class ResultFileError(RobotError, ValueError):
     """A result file is missing, malformed or from another mechanism."""
 
 
+class DriveError(RobotError, ValueError):
+    """A drive (the prescribed motion of the actuators) does not fit the mechanism it drives."""
+
+
 class InitialStateError(KinematicsError, ValueError):
     """The initial positions or velocities a scene asks for cannot be met by the mechanism."""
 

@@ -14,6 +14,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import warnings
 from pathlib import Path
@@ -23,7 +24,7 @@ import pinocchio as pin
 import pytest
 
 from clearance_contact import ContactError
-from robot.errors import RedundantConstraintWarning
+from robot.errors import DriveError, Error, RedundantConstraintWarning
 from robot.model.description import CLOSURE_TYPES
 from robot.model import constraints as C
 from robot.dynamics import equations as D
@@ -189,36 +190,163 @@ def test_packed_slots_are_the_compiled_terms_arrays(misaligned):
     of that name: the same values in the same memory (what one writes the other sees)."""
     from robot.dynamics import rhs_kernels as K
 
-    compiled = D.make_workspace(misaligned.dynamics).compiled
+    dynamics = misaligned.dynamics
+    compiled = D.make_workspace(dynamics).compiled
     slots = {
         K.FRAMES_A: compiled.frames_a, K.FRAMES_B: compiled.frames_b, K.CLOSURE_ROWS: compiled.closure_rows,
         K.ACTUATOR_Q: compiled.actuator_q, K.ACTUATOR_V: compiled.actuator_v, K.CLOSURE_MASKS: compiled.closure_masks,
-        K.SITE_TABLE: compiled.site_table, K.SITE_MASKS: compiled.site_masks, K.DRIFT: compiled.drift, K.TAU: compiled.tau,
+        K.SITE_TABLE: compiled.site_table, K.SITE_MASKS: compiled.site_masks, K.PROBE_GATHER: compiled.probe_gather,
+        K.DRIFT: compiled.drift, K.TAU: compiled.tau, K.GAINS: compiled.gains, K.DRIVE: compiled.drive_values,
         K.LAW_PARAMETERS: compiled.site_parameters, K.LAW_OUTPUTS: compiled.site_outputs_buffer, K.SITE_TWISTS: compiled.site_twists,
     }  # fmt: skip
+    assert sorted(slots) == list(range(K.N_SLOTS))
     for slot, array in slots.items():
         assert array.size > 0, slot  # the scene has closures, actuators and compiled laws
         buffer = compiled.indices if slot < K.DRIFT else compiled.work
         read = {1: K._flat, 2: K._matrix, 3: K._cube}[array.ndim](buffer, compiled.indices, slot)
         np.testing.assert_array_equal(read, array)
         assert np.shares_memory(read, array), slot
-    np.testing.assert_array_equal(K._flat(compiled.work, compiled.indices, K.GAINS), [2.0 * misaligned.dynamics.baumgarte.alpha, misaligned.dynamics.baumgarte.beta**2])
+    gains = dynamics.baumgarte
+    np.testing.assert_array_equal(compiled.gains, [2.0 * gains.alpha, gains.beta**2])
+    assert compiled.drive_values.shape == (3 * 5,) and compiled.probe_gather.shape == (dynamics.n_candidates, 3)
+
+
+def test_pack_keeps_empty_slots_in_place():
+    """Empty slots (no closure, no site: shapes (0,), (0, 3), (0, 2, nv)) read back empty with their shapes,
+    and the slots after them keep their values; a missing slot is refused."""
+    from robot.dynamics import rhs_kernels as K
+
+    nv = 7
+    rng = np.random.default_rng(8)
+    empty = {
+        K.FRAMES_A: np.zeros(0), K.PROBE_GATHER: np.zeros((0, 3)), K.SITE_MASKS: np.zeros((0, 2, nv)), K.SITE_TWISTS: np.zeros((0, 2, 6))
+    }  # fmt: skip
+    arrays = {
+        slot: empty.get(slot, rng.integers(-9, 9, size=(slot % 3 + 1, 2)) if slot < K.DRIFT else rng.standard_normal(slot))
+        for slot in range(K.N_SLOTS)
+    }
+    indices, work, views = K.pack(arrays)
+    assert sorted(views) == list(range(K.N_SLOTS))
+    for slot, array in arrays.items():
+        buffer = indices if slot < K.DRIFT else work
+        assert views[slot].dtype == (np.int64 if slot < K.DRIFT else np.float64)
+        assert views[slot].shape == np.shape(array)
+        read = {1: K._flat, 2: K._matrix, 3: K._cube}[np.ndim(array)](buffer, indices, slot)
+        assert read.shape == np.shape(array), slot
+        np.testing.assert_array_equal(read, array)
+    assert indices.size == 4 * K.N_SLOTS + sum(np.size(arrays[s]) for s in range(K.DRIFT))
+    assert work.size == sum(np.size(arrays[s]) for s in range(K.DRIFT, K.N_SLOTS))
+    with pytest.raises(ValueError, match=rf"missing slots \[{K.GAINS}\]"):
+        K.pack({slot: array for slot, array in arrays.items() if slot != K.GAINS})
 
 
 def test_compiled_sites_report_a_failing_law_with_its_message(misaligned):
     """A law that refuses its input inside the fused compiled call raises the law's own ContactError."""
     dynamics = misaligned.dynamics
     workspace = D.make_workspace(dynamics)
-    assert workspace.compiled.fused is not None
+    assert workspace.compiled.sites_fused
     y = np.concatenate([misaligned.y0, [0.0, 0.0]])
     y[dynamics.nq + dynamics.nv - 1] = np.nan  # a non-finite velocity reaches the contact laws
     with pytest.raises(ContactError, match="non-finite"):
         D.state_derivative(dynamics, workspace, 0.0, y, np.full(dynamics.n_candidates, 0.1))
 
 
+@pytest.mark.parametrize("call", ["state_derivative", "contact_probe"])
+def test_a_failing_law_names_its_site_and_time(misaligned, call):
+    """NaN onset rates on the second clearance joint (R1): the error names R1, t and the law's own reason."""
+    dynamics = misaligned.dynamics
+    workspace = D.make_workspace(dynamics)
+    assert workspace.compiled.sites_fused and [c.site.name for c in dynamics.contacts] == ["S1", "R1"]
+    y = np.concatenate([misaligned.y0, [0.0, 0.0]])
+    onset = np.full(dynamics.n_candidates, 0.1)
+    onset[dynamics.contacts[1].candidates] = np.nan
+    q, v = y[: dynamics.nq], y[dynamics.nq : dynamics.nq + dynamics.nv]
+    with pytest.raises(ContactError, match=r"^contact law of 'R1' failed at t=0\.25: non-finite input onset_rates=\[nan") as caught:
+        if call == "state_derivative":
+            D.state_derivative(dynamics, workspace, 0.25, y, onset)
+        else:
+            D.contact_probe(dynamics, workspace, 0.25, q, v, onset)
+    assert isinstance(caught.value.__cause__, ContactError)  # the law's own error, chained
+
+
+@pytest.mark.parametrize("change", [-1, 1])
+def test_a_drive_with_the_wrong_number_of_values_is_refused(misaligned, change):
+    """4 or 6 values for the 5 actuators: the workspace refuses the drive (the compiled calls would read past it)."""
+
+    class Resized:
+        def drive(self, t):
+            values = misaligned.dynamics.drive.drive(t)
+            return tuple(np.resize(a, a.size + change) for a in values)
+
+    dynamics = dataclasses.replace(misaligned.dynamics, drive=Resized())
+    assert len(dynamics.mechanism.actuator_q_index) == 5
+    with pytest.raises(DriveError, match=rf"returns \[{5 + change}, {5 + change}, {5 + change}\] values .* has 5 motion-driven") as caught:
+        D.make_workspace(dynamics)
+    assert isinstance(caught.value, Error) and caught.value.key == "drive"
+
+
 def test_compiled_right_hand_side_runs_as_plain_python():
-    """``CLEARANCE_CONTACT_JIT=0``: the kernels of ``robot.dynamics.rhs_kernels`` run as Python, same answers."""
-    assert_passes_as_plain_python(__file__, "state_derivative_equals_reference or placement_buffer", 2 * len(RHS_SCENES) + 1)
+    """``CLEARANCE_CONTACT_JIT=0``: the kernels of ``robot.dynamics.rhs_kernels`` run as Python, same answers
+    (the right-hand side, the probe with and without its residual, an exact drive segment)."""
+    selection = "state_derivative_equals_reference or placement_buffer or probe_without_residual or exact_drive_segment"
+    assert_passes_as_plain_python(__file__, selection, 2 * len(RHS_SCENES) + 3)
+
+
+def test_probe_without_residual_gives_the_same_contacts(misaligned):
+    """``contact_probe(residual=False)``: the same penetrations, rates and normal forces bit for bit, residual NaN."""
+    dynamics = misaligned.dynamics
+    workspace = D.make_workspace(dynamics)
+    assert workspace.compiled.sites_fused
+    nq, nv = dynamics.nq, dynamics.nv
+    touched = 0
+    for t, y, onset in _random_states(misaligned, np.random.default_rng(21), 30):
+        q, v = D.normalise_quaternions(dynamics.mechanism, y[:nq]), y[nq : nq + nv]
+        try:
+            full = D.contact_probe(dynamics, workspace, t, q, v, onset)
+        except ContactError:
+            continue
+        quick = D.contact_probe(dynamics, workspace, t, q, v, onset, residual=False)
+        assert math.isnan(quick.residual) and math.isfinite(full.residual) and full.residual > 0.0
+        for name in ("penetration", "penetration_rate", "normal_force"):
+            np.testing.assert_array_equal(getattr(quick, name), getattr(full, name), err_msg=name)
+        touched += bool(np.any(full.normal_force > 0.0))
+    assert touched >= 3  # states in contact, not only zero forces
+
+
+def test_exact_drive_segment_reaches_the_compiled_calls_bit_for_bit(misaligned):
+    """Where the drive table cannot fit the drive (a kink), the compiled right-hand side and probe
+    read the drive's own values, bit for bit, and the probe's residual is computed from them."""
+    from robot.dynamics import rhs_kernels as K
+
+    class Kinked:
+        """The scene's drive plus a kink of 1 mm/s slope change at t = 0.7 s on every actuator."""
+
+        def drive(self, t):
+            s, sd, sdd = misaligned.dynamics.drive.drive(t)
+            return s + 1e-3 * abs(t - 0.7), sd + 1e-3 * math.copysign(1.0, t - 0.7), sdd.copy()
+
+    dynamics = dataclasses.replace(misaligned.dynamics, drive=Kinked())
+    workspace = D.make_workspace(dynamics)
+    compiled, table = workspace.compiled, workspace.drive
+    nq, nv = dynamics.nq, dynamics.nv
+    y = np.concatenate([misaligned.y0, [0.0, 0.0]])
+    q, v = D.normalise_quaternions(dynamics.mechanism, y[:nq]), y[nq : nq + nv]
+    onset = np.full(dynamics.n_candidates, 0.1)
+    for t in (0.7 - 0.01, 0.7 + 1e-3, 0.2):  # two times in the kinked segment, one in a smooth one
+        exact = np.concatenate(dynamics.drive.drive(t))
+        compiled.drive_values[:] = np.nan
+        D.state_derivative(dynamics, workspace, t, y, onset)
+        from_rhs = compiled.drive_values.copy()
+        compiled.drive_values[:] = np.nan
+        probe = D.contact_probe(dynamics, workspace, t, q, v, onset)
+        np.testing.assert_array_equal(compiled.drive_values, from_rhs)
+        worst = K.largest_residual(compiled.placements, compiled.frames_a, compiled.frames_b, compiled.closure_rows, q, from_rhs, compiled.actuator_q)
+        assert probe.residual == worst
+        if t == 0.2:  # the table's polynomial: within its tolerance, not the drive's rounding
+            np.testing.assert_allclose(from_rhs, exact, rtol=0, atol=1e-12 * np.max(np.abs(exact)))
+        else:
+            np.testing.assert_array_equal(from_rhs, exact)
+    assert table.exact_segments == 1 and table.segments[math.floor(0.7 / table.width)][1] is None
 
 
 def test_state_derivative_contact_hint_does_not_change_the_result(misaligned):

@@ -100,3 +100,20 @@ def test_compiled_outputs_refuse_a_model_without_compiled_right_hand_side():
     workspace.compiled = None
     with pytest.raises(ValueError, match="compiled right-hand side"):
         RO.compiled_outputs(run.dynamics, *records, workspace=workspace)
+
+
+def test_compiled_outputs_do_not_depend_on_the_chunk_size(monkeypatch):
+    """The laws' outputs buffered per CHUNK records: chunks of 1, 7 and n - 1 records (a last partial
+    chunk) give every array bit for bit as one chunk of all n records."""
+    run, trajectory, records = _records("compound_misaligned", CALIBRATED_COMPOUND, 0.05)
+    n = len(records[0])
+    monkeypatch.setattr(RO, "CHUNK", n)
+    whole = RO.compiled_outputs(run.dynamics, *records)
+    assert np.max(whole["R1_normal_force"]) > 100.0 and np.max(whole["S1_normal_force"]) > 100.0  # both joints in contact
+    assert n % 7 != 0 and n > 8
+    for chunk in (1, 7, n - 1):
+        monkeypatch.setattr(RO, "CHUNK", chunk)
+        got = RO.compiled_outputs(run.dynamics, *records)
+        assert sorted(got) == sorted(whole)
+        for key, value in whole.items():
+            assert np.array_equal(got[key], value, equal_nan=True), (chunk, key)

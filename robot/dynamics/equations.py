@@ -55,6 +55,7 @@ import pinocchio as pin
 from clearance_contact import ContactError, SphericalClearanceJoint
 
 from robot.dynamics.baumgarte import Baumgarte
+from robot.errors import DriveError
 from robot.dynamics.probe import Probe
 from robot.model import constraints as C
 from robot.model import redundancy as R
@@ -179,6 +180,8 @@ class DynamicsWorkspace:
 
 
 def make_workspace(dynamics: DynamicsModel) -> DynamicsWorkspace:
+    """The per-run state of ``dynamics``; raises :class:`robot.errors.DriveError` if its drive does not fit the mechanism."""
+    check_drive_size(dynamics)
     model = dynamics.mechanism.model
     data = model.createData()
     kernel = C.ConstraintKernel(dynamics.constraints, data)
@@ -191,6 +194,25 @@ def make_workspace(dynamics: DynamicsModel) -> DynamicsWorkspace:
         compiled=CompiledTerms.for_dynamics(dynamics, data, kernel),
         forces=None if dynamics.forces is None else dynamics.forces.bind(model, data),
     )
+
+
+def check_drive_size(dynamics: DynamicsModel) -> None:
+    """Raise :class:`robot.errors.DriveError` unless the drive gives one value of s, sd and sdd per motion actuator.
+
+    Checked once, at t = 0, when a workspace is made: the compiled right-hand side reads
+    the drive's values without bounds checks (:func:`robot.dynamics.rhs_kernels.power_series`).
+    """
+    mechanism = dynamics.mechanism
+    expected = len(mechanism.actuator_q_index) if dynamics.constraints.driven else 0
+    sizes = [np.size(values) for values in dynamics.drive.drive(0.0)]
+    if sizes != [expected] * 3:
+        raise DriveError(
+            f"the drive {type(dynamics.drive).__name__} returns {sizes} values of (s, sd, sdd) at t=0 but the mechanism "
+            f"has {expected} motion-driven actuators {list(mechanism.actuated_joints)}: give the drive one value of s, "
+            "sd and sdd per motion actuator, in that order",
+            key="drive",
+            value=sizes,
+        )
 
 
 class CompiledSite(NamedTuple):
@@ -238,62 +260,80 @@ class CompiledTerms:
         self.phi_q = kernel.phi_q  # driving rows written once by the kernel
         # sizes as plain ints (a read of a Pinocchio property costs ~0.1 us)
         self.model, self.nq, self.nq_nv, self.state_size = model, model.nq, model.nq + model.nv, dynamics.state_size
-        self.n_closure_rows = kernel.n_closure_rows
         self.n_candidates = dynamics.n_candidates
         laws = [contact.law for contact in dynamics.contacts]
         # compiled: a law whose type has a kernel id (known to rhs_kernels.law_kernel) and whose kernel
         # does everything (``law.kernel`` is None e.g. for a user-defined friction law); others: ``evaluate``
         compiled_law = [getattr(law, "KERNEL_ID", None) in K.LAW_IDS.values() and law.kernel is not None for law in laws]
         self.laws_compiled = all(compiled_law)
-        # every site in the compiled calls (rhs_kernels.all_sites) when every law is a shipped compiled law
-        self.fused = K.all_sites if laws and self.laws_compiled and all(law.kernel in K.LAW_IDS for law in laws) else None
-        sizes = [law.output_size if ok else 0 for law, ok in zip(laws, compiled_law)]
+        # every site is evaluated inside the compiled calls (rhs_kernels.all_sites): every law a shipped compiled law
+        self.sites_fused = bool(laws) and self.laws_compiled and all(law.kernel in K.LAW_IDS for law in laws)
         parameters = [np.asarray(law.kernel_parameters, dtype=float) if ok else np.zeros(0) for law, ok in zip(laws, compiled_law)]
-        table = _site_table(dynamics, sizes, [p.shape[0] for p in parameters]) if self.fused else np.zeros((0, K.SITE_COLUMNS))
-        actuators = (dynamics.mechanism.actuator_q_index, dynamics.mechanism.actuator_v_index) if kernel.driven else ((), ())
+        # each site's [start, end) in the packed law parameters and outputs (empty for a law evaluated through its API)
+        parameter_ranges = _consecutive_ranges([p.shape[0] for p in parameters])
+        output_sizes = [law.output_size if ok else 0 for law, ok in zip(laws, compiled_law)]
+        output_ranges = _consecutive_ranges(output_sizes)
+        table = _site_table(dynamics, parameter_ranges, output_ranges) if self.sites_fused else np.zeros((0, K.SITE_COLUMNS))
+        actuator_q, actuator_v = (dynamics.mechanism.actuator_q_index, dynamics.mechanism.actuator_v_index) if kernel.driven else ((), ())
         gains = dynamics.baumgarte
-        # closure i owns rows closure_rows[i]:closure_rows[i + 1] (3 spherical, 5 revolute); drivers after
         self.indices, self.work, views = K.pack(
-            [
-                [c.frame_a for c in closures], [c.frame_b for c in closures],
-                [rows.row for rows in dynamics.constraints.closures] + [kernel.n_closure_rows], *actuators,
-                K.support_mask(model, [f for c in closures for f in (c.frame_a, c.frame_b)]), table,
-                np.array([K.support_mask(model, [c.site.outer_frame, c.site.inner_frame]) for c in dynamics.contacts]).reshape(len(laws), 2, model.nv),
-                _probe_gather(dynamics, table) if self.fused else np.zeros((0, 3)),
-            ],
-            [
-                np.zeros(kernel.n_rows), np.zeros(model.nv), [2.0 * gains.alpha, gains.beta * gains.beta], np.zeros(3 * len(actuators[0])),
-                np.concatenate([np.zeros(0), *parameters]), np.zeros(sum(sizes)), np.zeros((len(laws), 2, 6)),
-            ],
-        )  # fmt: skip
-        (
-            self.frames_a, self.frames_b, self.closure_rows, self.actuator_q, self.actuator_v, self.closure_masks, self.site_table,
-            self.site_masks, _, self.drift, self.tau, _, _, self.site_parameters, self.site_outputs_buffer, self.site_twists,
-        ) = views  # fmt: skip
-        self._build_sites(dynamics, compiled_law, sizes, parameters)
+            {
+                K.FRAMES_A: [c.frame_a for c in closures],
+                K.FRAMES_B: [c.frame_b for c in closures],
+                # closure i owns rows closure_rows[i]:closure_rows[i + 1] (3 spherical, 5 revolute); drivers after
+                K.CLOSURE_ROWS: [rows.row for rows in dynamics.constraints.closures] + [kernel.n_closure_rows],
+                K.ACTUATOR_Q: actuator_q,
+                K.ACTUATOR_V: actuator_v,
+                K.CLOSURE_MASKS: K.support_mask(model, [f for c in closures for f in (c.frame_a, c.frame_b)]),
+                K.SITE_TABLE: table,
+                K.SITE_MASKS: np.array(
+                    [K.support_mask(model, [c.site.outer_frame, c.site.inner_frame]) for c in dynamics.contacts]
+                ).reshape(len(laws), 2, model.nv),
+                K.PROBE_GATHER: _probe_gather(dynamics, table) if self.sites_fused else np.zeros((0, 3)),
+                K.DRIFT: np.zeros(kernel.n_rows),
+                K.TAU: np.zeros(model.nv),
+                K.GAINS: [2.0 * gains.alpha, gains.beta * gains.beta],
+                K.DRIVE: np.zeros(3 * len(actuator_q)),
+                K.LAW_PARAMETERS: np.concatenate([np.zeros(0), *parameters]),
+                K.LAW_OUTPUTS: np.zeros(sum(output_sizes)),
+                K.SITE_TWISTS: np.zeros((len(laws), 2, 6)),
+            }
+        )
+        self.frames_a, self.frames_b, self.closure_rows = views[K.FRAMES_A], views[K.FRAMES_B], views[K.CLOSURE_ROWS]
+        self.actuator_q, self.actuator_v, self.closure_masks = views[K.ACTUATOR_Q], views[K.ACTUATOR_V], views[K.CLOSURE_MASKS]
+        self.site_table, self.site_masks, self.probe_gather = views[K.SITE_TABLE], views[K.SITE_MASKS], views[K.PROBE_GATHER]
+        self.drift, self.tau, self.gains, self.drive_values = views[K.DRIFT], views[K.TAU], views[K.GAINS], views[K.DRIVE]
+        self.site_parameters, self.site_outputs_buffer = views[K.LAW_PARAMETERS], views[K.LAW_OUTPUTS]
+        self.site_twists = views[K.SITE_TWISTS]
+        self._build_sites(dynamics, compiled_law, parameter_ranges, output_ranges)
         self._build_output_views(dynamics)
 
-    def _build_sites(self, dynamics: DynamicsModel, compiled_law: list[bool], sizes: list[int], parameters: list[np.ndarray]) -> None:
+    def _build_sites(
+        self,
+        dynamics: DynamicsModel,
+        compiled_law: list[bool],
+        parameter_ranges: list[tuple[int, int]],
+        output_ranges: list[tuple[int, int]],
+    ) -> None:
         """One :class:`CompiledSite` per contact site: its parameters, masks, twists and outputs are views of the packed arrays."""
         self.sites = []
-        first_parameter = first_output = 0
-        for index, (contact, ok, size, n_parameters) in enumerate(zip(dynamics.contacts, compiled_law, sizes, (p.shape[0] for p in parameters))):
+        sites = zip(dynamics.contacts, compiled_law, parameter_ranges, output_ranges)
+        for index, (contact, ok, parameter_range, output_range) in enumerate(sites):
             law, site = contact.law, contact.site
             self.sites.append(
                 CompiledSite(
                     law.kernel if ok else None,
-                    self.site_parameters[first_parameter : first_parameter + n_parameters] if ok else None,
+                    self.site_parameters[slice(*parameter_range)] if ok else None,
                     self.site_masks[index],
                     site.outer_frame,
                     site.inner_frame,
                     contact.candidates,
                     self.site_twists[index],
-                    self.site_outputs_buffer[first_output : first_output + size] if ok else None,
+                    self.site_outputs_buffer[slice(*output_range)] if ok else None,
                     law.WRENCH_OUTER if ok else 0,  # a Python law's wrenches are stacked [outer, inner]
                     law.WRENCH_INNER if ok else 6,
                 )
             )
-            first_parameter, first_output = first_parameter + n_parameters, first_output + size
 
     def _build_output_views(self, dynamics: DynamicsModel) -> None:
         # per site: candidate slice and views of its law's penetration, rate and normal force outputs
@@ -328,19 +368,23 @@ class CompiledTerms:
         return cls(dynamics, data, kernel)
 
 
-def _site_table(dynamics: DynamicsModel, sizes: list[int], parameter_sizes: list[int]) -> np.ndarray:
+def _consecutive_ranges(sizes: list[int]) -> list[tuple[int, int]]:
+    """``[start, end)`` of each of ``sizes`` laid end to end from 0."""
+    ends = np.cumsum(sizes, dtype=np.int64).tolist()
+    return [(end - size, end) for size, end in zip(sizes, ends)]
+
+
+def _site_table(dynamics: DynamicsModel, parameter_ranges: list[tuple[int, int]], output_ranges: list[tuple[int, int]]) -> np.ndarray:
     """The site table of :func:`robot.dynamics.rhs_kernels.all_sites` (every law a shipped compiled law)."""
     table = np.zeros((len(dynamics.contacts), K.SITE_COLUMNS), dtype=np.int64)
-    first_parameter = first_output = 0
-    for row, contact, size, n_parameters in zip(table, dynamics.contacts, sizes, parameter_sizes):
+    for row, contact, parameter_range, output_range in zip(table, dynamics.contacts, parameter_ranges, output_ranges):
         law, site = contact.law, contact.site
         row[K.SITE_LAW] = K.LAW_IDS[law.kernel]
         row[K.SITE_OUTER], row[K.SITE_INNER] = site.outer_frame, site.inner_frame
         row[K.SITE_FIRST], row[K.SITE_LAST] = contact.candidates.start, contact.candidates.stop
-        row[K.SITE_PARAMETERS], row[K.SITE_PARAMETERS_END] = first_parameter, first_parameter + n_parameters
-        row[K.SITE_OUT], row[K.SITE_OUT_END] = first_output, first_output + size
+        row[K.SITE_PARAMETERS], row[K.SITE_PARAMETERS_END] = parameter_range
+        row[K.SITE_OUT], row[K.SITE_OUT_END] = output_range
         row[K.SITE_WRENCH_OUTER], row[K.SITE_WRENCH_INNER] = law.WRENCH_OUTER, law.WRENCH_INNER
-        first_parameter, first_output = first_parameter + n_parameters, first_output + size
     return table
 
 
@@ -381,7 +425,7 @@ class DriveTable:
         n = self.degree + 1
         self.nodes = np.cos(np.pi * (np.arange(n) + 0.5) / n)[::-1]
         self.check_points = np.linspace(-1.0, 1.0, checks + 2)[1:-1] + 0.5 / (checks + 1)
-        self.segments: dict[int, tuple[float, np.ndarray | None, int]] = {}
+        self.segments: dict[int, tuple[float, np.ndarray | None]] = {}  # per segment: its middle, coefficients (None: exact)
         self.exact_segments = 0
         self._to_unit = 2.0 / self.width
         self._low = self._high = math.nan  # the previous call's segment [low, high)
@@ -394,7 +438,7 @@ class DriveTable:
         samples = np.array([np.concatenate(drive.drive(middle + half * x)) for x in self.nodes])
         m = samples.shape[1] // 3
         if m == 0:  # no motion-driven actuator
-            segment = (middle, np.zeros((self.degree + 1, 0)), 0)
+            segment = (middle, np.zeros((self.degree + 1, 0)))
             self.segments[k] = segment
             return segment
         coefficients = np.linalg.solve(np.vander(self.nodes, self.degree + 1, increasing=True), samples)
@@ -410,7 +454,7 @@ class DriveTable:
                 break
         if not ok:
             self.exact_segments += 1
-        segment = (middle, coefficients if ok else None, m)
+        segment = (middle, coefficients if ok else None)
         self.segments[k] = segment
         return segment
 
@@ -430,7 +474,7 @@ class DriveTable:
                 segment = self._build(k)
             self._last = segment
             self._low, self._high = k * self.width, (k + 1) * self.width
-        middle, coefficients, _ = self._last
+        middle, coefficients = self._last
         if coefficients is None:
             return np.concatenate(self.drive.drive(t))[None, :], 0.0
         return coefficients, (t - middle) * self._to_unit
@@ -660,10 +704,12 @@ def _compiled_state_derivative(
     pin.updateFramePlacements(model, data)
     work, indices, phi_q, tau = compiled.work, compiled.indices, compiled.phi_q, compiled.tau
     # the drive, closure rows and drift, tau = 0, and every site when all laws are shipped compiled laws
-    code = K.rhs_terms(work, indices, compiled.placements, compiled.jacobian, compiled.jacobian_rate, q, v, coefficients, x, onset_rates, phi_q)
+    code = K.rhs_terms(
+        work, indices, compiled.placements, compiled.jacobian, compiled.jacobian_rate, q, v, coefficients, x, onset_rates, phi_q
+    )
     if code != 0:
         _raise_site_failure(dynamics, workspace, compiled, code, onset_rates, t)
-    if compiled.fused is None:
+    if not compiled.sites_fused:
         _compiled_sites(dynamics, workspace, compiled, t, v, onset_rates, tau)
     out = np.empty(compiled.state_size)
     # force elements: data.oMi and data.J are at q (computeJointJacobiansTimeVariation)
@@ -708,10 +754,15 @@ def _raise_site_failure(dynamics: DynamicsModel, workspace: DynamicsWorkspace, c
 
 
 def _raise_contact_error(dynamics: DynamicsModel, workspace: DynamicsWorkspace, index: int, twists, onset, t: float, status: int):
-    """A compiled law returned ``status != 0``: raise its ``evaluate``'s informative ``ContactError``."""
-    views = workspace.sites[index]
-    views.law.evaluate(views.outer_rotation, views.outer_position, twists[0], views.inner_rotation, views.inner_position, twists[1], onset)
-    raise ContactError(f"contact law of {dynamics.contacts[index].site.name!r} failed (status {status}) at t={t!r}")
+    """A compiled law returned ``status != 0``: raise a ``ContactError`` naming the site and t, with the message
+    of the law's ``evaluate`` (its informative error on the same input) when it raises one."""
+    views, name = workspace.sites[index], dynamics.contacts[index].site.name
+    outer, inner = (views.outer_rotation, views.outer_position, twists[0]), (views.inner_rotation, views.inner_position, twists[1])
+    try:
+        views.law.evaluate(*outer, *inner, onset)
+    except ContactError as exc:
+        raise ContactError(f"contact law of {name!r} failed at t={t!r}: {exc}", key=exc.key, value=exc.value) from exc
+    raise ContactError(f"contact law of {name!r} failed (status {status}) at t={t!r}")
 
 
 _NO_DRIVE = (np.zeros((1, 0)), 0.0)  # the probe's drive polynomial when the residual is not asked for (not read)
@@ -734,15 +785,20 @@ def contact_probe(
         pin.computeJointJacobians(model, data, q)
         pin.updateFramePlacements(model, data)
         # compiled.tau receives the (unused) J^T w: every right-hand side starts by zeroing it
-        if compiled.fused is not None:
+        if compiled.sites_fused:
             coefficients, x = workspace.drive.polynomial(t) if residual else _NO_DRIVE
-            code, worst = K.probe_terms(compiled.work, compiled.indices, compiled.placements, compiled.jacobian, q, v, coefficients, x, onset_rates, pen, rate, force, residual)
+            code, worst = K.probe_terms(
+                compiled.work, compiled.indices, compiled.placements, compiled.jacobian, q, v, coefficients, x, onset_rates,
+                pen, rate, force, residual,
+            )  # fmt: skip
             if code != 0:
                 _raise_site_failure(dynamics, workspace, compiled, code, onset_rates, t)
             return Probe(pen, rate, worst, force)
         worst = math.nan
         if residual:
-            worst = K.largest_residual(compiled.placements, compiled.frames_a, compiled.frames_b, compiled.closure_rows, q, workspace.drive.values(t), compiled.actuator_q)
+            worst = K.largest_residual(
+                compiled.placements, compiled.frames_a, compiled.frames_b, compiled.closure_rows, q, workspace.drive.values(t), compiled.actuator_q
+            )
         _compiled_sites(dynamics, workspace, compiled, t, v, onset_rates, compiled.tau)
         for candidates, penetration, penetration_rate, normal_force in compiled.site_outputs:
             pen[candidates] = penetration

@@ -37,16 +37,21 @@ Called from Python, a compiled function costs ~0.1 us per array argument
 :func:`rhs_terms` before Pinocchio's KKT solve and :func:`finish_derivative`
 after it, and the step loop's probe one, :func:`probe_terms`, each on two
 packed buffers (:func:`pack`) instead of some twenty arrays; the functions
-they call are the building blocks above, unchanged.
+they call are the building blocks above. The drive's ``[s, sd, sdd]`` are summed
+inside these calls from its table's polynomial (:func:`power_series`, which
+writes as many values as its output holds: the drive's value count is checked
+once, ``robot.dynamics.equations.check_drive_size``).
 """
 
 from __future__ import annotations
 
 import ctypes
+from collections.abc import Mapping
 from pathlib import Path
 
 import numpy as np
 import pinocchio as pin
+from numpy.typing import ArrayLike
 
 from clearance_contact.compiled import JIT_ENABLED, drop_stale_caches, jit
 from clearance_contact.revolute import RevoluteClearanceJoint, revolute_kernel
@@ -84,7 +89,10 @@ def placement_buffer(placements: "pin.StdVec_SE3") -> np.ndarray:
 
 
 def support_mask(model: pin.Model, frame_ids) -> np.ndarray:
-    """(len(frame_ids), nv) uint8: 1 where a velocity coordinate moves the frame's body."""
+    """(len(frame_ids), nv) uint8: 1 where a velocity coordinate moves the frame's body.
+
+    The kernels only test an entry for nonzero: :func:`pack` stores the masks as int64.
+    """
     mask = np.zeros((len(frame_ids), model.nv), dtype=np.uint8)
     for row, frame_id in enumerate(frame_ids):
         for joint in model.supports[model.frames[frame_id].parentJoint]:
@@ -313,7 +321,11 @@ def largest_residual(placements, frames_a, frames_b, closure_rows, q, drive, act
 
 @jit
 def power_series(coefficients, x, out):
-    """out[j] = sum_k coefficients[k, j] x^k (Horner's rule), for every j of ``out``."""
+    """out[j] = sum_k coefficients[k, j] x^k (Horner's rule), for every j of ``out``.
+
+    ``coefficients`` must have at least ``out.shape[0]`` columns (not checked here: the
+    compiled code has no bounds checks; ``check_drive_size`` checks the drive once).
+    """
     n = coefficients.shape[0]
     for j in range(out.shape[0]):
         value = coefficients[n - 1, j]
@@ -414,32 +426,39 @@ def probe_sites(placements, J, v, onset_rates, tau, table, masks, parameters, ou
 ) = range(9)  # fmt: skip
 #: ... then float64 (``GAINS`` = [2 alpha, beta^2]; ``DRIVE`` = [s, sd, sdd] of the driving rows, empty without)
 DRIFT, TAU, GAINS, DRIVE, LAW_PARAMETERS, LAW_OUTPUTS, SITE_TWISTS = range(9, 16)
+#: the number of slots: those below ``DRIFT`` are int64, the others float64
+N_SLOTS = 16
 
 
-def pack(integers: list[np.ndarray], floats: list[np.ndarray]) -> tuple[np.ndarray, np.ndarray, list[np.ndarray]]:
-    """``(indices, work, views)``: the arrays (at most 3-D) copied into one int64 and one float64 buffer.
+def pack(arrays: Mapping[int, ArrayLike]) -> tuple[np.ndarray, np.ndarray, dict[int, np.ndarray]]:
+    """``(indices, work, views)``: the arrays ``{slot: array}`` (at most 3-D) copied into one int64 and one float64 buffer.
 
     Why: numba unboxes every array argument of a compiled call (~0.1 us each), so
     the fused kernels below take these two buffers instead of some twenty arrays.
-    ``indices`` starts with a header of 4 int64 per slot (``integers`` then
-    ``floats``, in the order of the slot constants above): the slot's offset in
-    its buffer and its shape padded with 1s; the int64 data follow the header.
-    ``views`` are views of the buffers shaped as the arrays (the caller keeps
-    them: writing one writes what the kernels read, and the other way round).
+    ``arrays`` has one entry per slot constant above (``ValueError`` otherwise);
+    a slot below ``DRIFT`` is converted to int64, the others to float64.
+    ``indices`` starts with a header of 4 int64 per slot, in slot order: the slot's
+    offset in its buffer and its shape padded with 1s; the int64 data follow the
+    header. ``views[slot]`` is a view of its buffer shaped as the slot's array (the
+    caller keeps them: writing one writes what the kernels read, and the other way round).
     """
-    slots = [np.asarray(a, dtype=np.int64) for a in integers] + [np.asarray(a, dtype=np.float64) for a in floats]
-    header = 4 * len(slots)
-    sizes = [a.size for a in slots]
-    indices = np.zeros(header + sum(sizes[: len(integers)]), dtype=np.int64)
-    work = np.zeros(sum(sizes[len(integers) :]))
-    views, offsets = [], [header, 0]
+    if sorted(arrays) != list(range(N_SLOTS)):
+        missing, unknown = sorted(set(range(N_SLOTS)) - set(arrays)), sorted(set(arrays) - set(range(N_SLOTS)))
+        raise ValueError(f"pack needs one array per slot 0..{N_SLOTS - 1}; missing slots {missing}, unknown slots {unknown}")
+    slots = [np.asarray(arrays[slot], dtype=np.int64 if slot < DRIFT else np.float64) for slot in range(N_SLOTS)]
+    if any(array.ndim > 3 for array in slots):
+        raise ValueError(f"pack takes arrays of at most 3 dimensions; got shapes {[array.shape for array in slots]}")
+    header = 4 * N_SLOTS
+    indices = np.zeros(header + sum(array.size for array in slots[:DRIFT]), dtype=np.int64)
+    work = np.zeros(sum(array.size for array in slots[DRIFT:]))
+    views, offsets = {}, [header, 0]
     for slot, array in enumerate(slots):
-        buffer, kind = (indices, 0) if slot < len(integers) else (work, 1)
+        buffer, kind = (indices, 0) if slot < DRIFT else (work, 1)
         start = offsets[kind]
         indices[4 * slot : 4 * slot + 4] = [start, *array.shape, *(1,) * (3 - array.ndim)]
         view = buffer[start : start + array.size].reshape(array.shape)
         view[...] = array
-        views.append(view)
+        views[slot] = view
         offsets[kind] += array.size
     return indices, work, views
 
@@ -510,7 +529,9 @@ def finish_derivative(work, indices, multipliers, first_driving_row, v, qdd, con
 
 
 @jit
-def probe_terms(work, indices, placements, J, q, v, drive_coefficients, x, onset_rates, penetration, penetration_rate, normal_force, residual):
+def probe_terms(
+    work, indices, placements, J, q, v, drive_coefficients, x, onset_rates, penetration, penetration_rate, normal_force, residual
+):
     """:func:`probe_sites` and, if ``residual``, :func:`largest_residual` (else NaN; the drive as in :func:`rhs_terms`),
     in one call: ``(code, max |Phi|)``."""
     worst = np.nan
@@ -518,11 +539,12 @@ def probe_terms(work, indices, placements, J, q, v, drive_coefficients, x, onset
         drive = _flat(work, indices, DRIVE)
         power_series(drive_coefficients, x, drive)
         worst = largest_residual(
-            placements, _flat(indices, indices, FRAMES_A), _flat(indices, indices, FRAMES_B), _flat(indices, indices, CLOSURE_ROWS), q, drive,
-            _flat(indices, indices, ACTUATOR_Q),
+            placements, _flat(indices, indices, FRAMES_A), _flat(indices, indices, FRAMES_B), _flat(indices, indices, CLOSURE_ROWS),
+            q, drive, _flat(indices, indices, ACTUATOR_Q),
         )  # fmt: skip
     code = probe_sites(
-        placements, J, v, onset_rates, _flat(work, indices, TAU), _matrix(indices, indices, SITE_TABLE), _cube(indices, indices, SITE_MASKS),
+        placements, J, v, onset_rates, _flat(work, indices, TAU), _matrix(indices, indices, SITE_TABLE),
+        _cube(indices, indices, SITE_MASKS),
         _flat(work, indices, LAW_PARAMETERS), _flat(work, indices, LAW_OUTPUTS), _cube(work, indices, SITE_TWISTS),
         _matrix(indices, indices, PROBE_GATHER), penetration, penetration_rate, normal_force,
     )  # fmt: skip

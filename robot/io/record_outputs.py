@@ -65,10 +65,12 @@ def allocate(dynamics: D.DynamicsModel, n: int) -> tuple[dict[str, np.ndarray], 
 def compiled_applies(dynamics: D.DynamicsModel, workspace: D.DynamicsWorkspace) -> bool:
     """Whether :func:`compiled_outputs` can evaluate this model (its right-hand side is compiled, laws fused)."""
     compiled = workspace.compiled
-    return compiled is not None and (compiled.fused is not None or not dynamics.contacts)
+    return compiled is not None and (compiled.sites_fused or not dynamics.contacts)
 
 
-def _end_effector_writer(model: pin.Model, data: pin.Data, frame: int, arrays: dict[str, np.ndarray]) -> Callable[[int, np.ndarray, np.ndarray, np.ndarray], None]:
+def _end_effector_writer(
+    model: pin.Model, data: pin.Data, frame: int, arrays: dict[str, np.ndarray]
+) -> Callable[[int, np.ndarray, np.ndarray, np.ndarray], None]:
     """``write(i, q, v, qdd)``: end-effector kinematics and the energies of record ``i`` (one forward kinematics pass).
 
     Pinocchio's functions and the arrays are bound once (a few microseconds a
@@ -171,7 +173,12 @@ def compiled_outputs(
 
 
 def _record_sites(
-    dynamics: D.DynamicsModel, compiled: D.CompiledTerms, per_site: dict[str, dict[str, np.ndarray]], rows: np.ndarray, site_outputs: np.ndarray, poses: np.ndarray
+    dynamics: D.DynamicsModel,
+    compiled: D.CompiledTerms,
+    per_site: dict[str, dict[str, np.ndarray]],
+    rows: np.ndarray,
+    site_outputs: np.ndarray,
+    poses: np.ndarray,
 ) -> None:
     """Each clearance joint's arrays at the records ``rows`` from the laws' flat outputs and the element poses there."""
     m = rows.shape[0]
