@@ -241,7 +241,7 @@ def test_pack_keeps_empty_slots_in_place():
 
 
 def test_compiled_sites_report_a_failing_law_with_its_message(misaligned):
-    """A law that refuses its input inside the fused compiled call raises the law's own ContactError."""
+    """A law that refuses its input inside the fused compiled call: its own ContactError, wrapped with the site's name."""
     dynamics = misaligned.dynamics
     workspace = D.make_workspace(dynamics)
     assert workspace.compiled.sites_fused
@@ -269,9 +269,35 @@ def test_a_failing_law_names_its_site_and_time(misaligned, call):
     assert isinstance(caught.value.__cause__, ContactError)  # the law's own error, chained
 
 
+def test_a_failing_laws_class_key_and_value_are_kept(misaligned, monkeypatch):
+    """The site-naming error keeps what the law said: its class, ``key`` and ``value``; a law that does not say, the status."""
+    from clearance_contact.errors import ContactParameterError
+
+    dynamics = misaligned.dynamics
+    workspace = D.make_workspace(dynamics)
+    twists, onset = np.zeros((2, 6)), np.zeros(dynamics.contacts[1].law.n_candidates)
+
+    class Refusing:
+        def evaluate(self, *args):
+            raise ContactParameterError("youngs_modulus=-1.0 must be positive", key="youngs_modulus", value=-1.0)
+
+    monkeypatch.setattr(workspace.sites[1], "law", Refusing())
+    with pytest.raises(ContactParameterError, match=r"^contact law of 'R1' failed at t=0\.5: youngs_modulus=-1\.0") as caught:
+        D._raise_contact_error(dynamics, workspace, 1, twists, onset, 0.5, 3)
+    assert (caught.value.key, caught.value.value) == ("youngs_modulus", -1.0) and isinstance(caught.value, ValueError)
+
+    class Silent:
+        def evaluate(self, *args):
+            return None
+
+    monkeypatch.setattr(workspace.sites[1], "law", Silent())
+    with pytest.raises(ContactError, match=r"^contact law of 'R1' failed \(status 3\) at t=0\.5$"):
+        D._raise_contact_error(dynamics, workspace, 1, twists, onset, 0.5, 3)
+
+
 @pytest.mark.parametrize("change", [-1, 1])
 def test_a_drive_with_the_wrong_number_of_values_is_refused(misaligned, change):
-    """4 or 6 values for the 5 actuators: the workspace refuses the drive (the compiled calls would read past it)."""
+    """4 or 6 values for the 5 actuators: the model and the workspace refuse the drive (the compiled calls would read past it)."""
 
     class Resized:
         def drive(self, t):
@@ -283,6 +309,10 @@ def test_a_drive_with_the_wrong_number_of_values_is_refused(misaligned, change):
     with pytest.raises(DriveError, match=rf"returns \[{5 + change}, {5 + change}, {5 + change}\] values .* has 5 motion-driven") as caught:
         D.make_workspace(dynamics)
     assert isinstance(caught.value, Error) and caught.value.key == "drive"
+    laws = {contact.site.name: contact.law for contact in dynamics.contacts}
+    with pytest.raises(DriveError, match="motion-driven"):  # already when the model is made (the run's set-up)
+        D.make_dynamics_model(dynamics.mechanism, laws, Resized(), dynamics.baumgarte)
+    D.make_dynamics_model(dynamics.mechanism, laws, misaligned.dynamics.drive, dynamics.baumgarte)  # the right drive passes
 
 
 def test_compiled_right_hand_side_runs_as_plain_python():

@@ -126,7 +126,9 @@ def collector_spared_setup() -> Iterator[Callable[[], None]]:
     built), which freezes every object then alive (``gc.freeze``: left out of
     later collections) and turns the collector back on for the run. Leaving the
     block unfreezes them and restores the collector's state, so a caller that
-    runs commands in its own process (tests) keeps an ordinary collector. The
+    runs commands in its own process (tests) keeps an ordinary collector; a
+    caller that had frozen objects of its own keeps them frozen, and then the
+    setup's stay frozen with them (``gc.unfreeze`` cannot tell them apart). The
     setup's garbage cycles (made while the collector was off) are kept until the
     block ends: it did not change the peak memory of ``clearance run``.
     """

@@ -160,7 +160,9 @@ def make_dynamics_model(
         contacts.append(ContactSite(site, law, offset))
         offset += law.n_candidates
     ee = mechanism.frame_id(end_effector_frame or "platform")
-    return DynamicsModel(mechanism, C.constraint_set(mechanism, driven=True), tuple(contacts), drive, baumgarte, ee, forces)
+    dynamics = DynamicsModel(mechanism, C.constraint_set(mechanism, driven=True), tuple(contacts), drive, baumgarte, ee, forces)
+    check_drive_size(dynamics)  # a wrong drive is bad input of the run's set-up (``clearance run --check`` finds it)
+    return dynamics
 
 
 @dataclass
@@ -199,7 +201,8 @@ def make_workspace(dynamics: DynamicsModel) -> DynamicsWorkspace:
 def check_drive_size(dynamics: DynamicsModel) -> None:
     """Raise :class:`robot.errors.DriveError` unless the drive gives one value of s, sd and sdd per motion actuator.
 
-    Checked once, at t = 0, when a workspace is made: the compiled right-hand side reads
+    Checked at t = 0 when the dynamics model is made and again when a workspace is
+    made (a model may be rebuilt with another drive): the compiled right-hand side reads
     the drive's values without bounds checks (:func:`robot.dynamics.rhs_kernels.power_series`).
     """
     mechanism = dynamics.mechanism
@@ -761,7 +764,12 @@ def _raise_contact_error(dynamics: DynamicsModel, workspace: DynamicsWorkspace, 
     try:
         views.law.evaluate(*outer, *inner, onset)
     except ContactError as exc:
-        raise ContactError(f"contact law of {name!r} failed at t={t!r}: {exc}", key=exc.key, value=exc.value) from exc
+        message = f"contact law of {name!r} failed at t={t!r}: {exc}"
+        try:  # the law's own class (ContactParameterError is also a ValueError callers may catch)
+            error = type(exc)(message, key=exc.key, value=exc.value)
+        except TypeError:  # a subclass with a constructor of its own
+            error = ContactError(message, key=exc.key, value=exc.value)
+        raise error from exc
     raise ContactError(f"contact law of {name!r} failed (status {status}) at t={t!r}")
 
 

@@ -427,7 +427,7 @@ def probe_sites(placements, J, v, onset_rates, tau, table, masks, parameters, ou
 #: ... then float64 (``GAINS`` = [2 alpha, beta^2]; ``DRIVE`` = [s, sd, sdd] of the driving rows, empty without)
 DRIFT, TAU, GAINS, DRIVE, LAW_PARAMETERS, LAW_OUTPUTS, SITE_TWISTS = range(9, 16)
 #: the number of slots: those below ``DRIFT`` are int64, the others float64
-N_SLOTS = 16
+N_SLOTS = SITE_TWISTS + 1
 
 
 def pack(arrays: Mapping[int, ArrayLike]) -> tuple[np.ndarray, np.ndarray, dict[int, np.ndarray]]:

@@ -10,11 +10,12 @@ impulses by far more than 1e-16. This module measures that spread for a scene:
 the same run repeated with
 
 * one coordinate of the initial state moved by one unit in the last place of
-  its block's scale (``numpy.spacing`` of the largest magnitude among the
-  positions, or among the velocities: one ulp of a coordinate that is zero or
-  nearly zero would be ~1e-300, far below what rounding does to it), for a
-  few coordinates; a block that is all zero (a start at rest) has no scale and
-  is not nudged;
+  its block's scale, ``numpy.spacing(max(1, largest |value| among the
+  positions, or among the velocities))``: rounding acts on every value the
+  step computes, not on the coordinate alone, and one ulp of a coordinate that
+  is zero or nearly zero (~1e-300, or 1e-20 for a mechanism starting near its
+  zero configuration) would be far below it; the floor of 1 makes it at least
+  the rounding of a unit-size value (2.2e-16, in SI units);
 * the relative and the absolute tolerance multiplied by ``1 + 1e-12`` (the
   step-size controller's decisions move at rounding level);
 
@@ -27,7 +28,7 @@ a bound; the report says how many variants moved anything at all. A code change 
 from the old code's by less than the band is indistinguishable from rounding;
 one that stays bit for bit identical differs by zero. The band also answers
 whether a criterion is meaningful at all: on ``compound_misaligned`` (2 s,
-CVODE_BDF rtol 1e-6) it is ~1e-5 for the peak forces and ~5e-6 for the
+CVODE_BDF rtol 1e-6) it is a few 1e-5 for the peak forces and a few 1e-6 for the
 impulses, so "peaks within 1e-6 of today's run" cannot be guaranteed short of
 bit identity (``docs/performance.md``).
 """
@@ -72,8 +73,8 @@ def perturbations(run: Run, options: SolverOptions, coordinates: tuple[int, ...]
 
     ``coordinates``: indices of the initial state to nudge (default: the first and
     the middle position coordinate, the first and the middle velocity coordinate);
-    each moves by one ulp of its block's scale. Indices of the integrator's extra
-    states (the works) or of an all-zero block are skipped.
+    each moves by one ulp of its block's scale (module docstring). Indices of the
+    integrator's extra states (the works) are skipped.
     """
     nq, nv = run.mechanism.model.nq, run.mechanism.model.nv
     if coordinates is None:
@@ -84,10 +85,9 @@ def perturbations(run: Run, options: SolverOptions, coordinates: tuple[int, ...]
         if not 0 <= index < run.y0.shape[0]:
             raise AnalysisError(f"coordinates: index {index} is outside the state (0 ... {run.y0.shape[0] - 1})")
         block = next((b for b in blocks if b.start <= index < b.stop), None)
-        scale = 0.0 if block is None else float(np.max(np.abs(run.y0[block])))
-        if scale == 0.0:
+        if block is None or block.stop == block.start:
             continue
-        nudge = float(np.spacing(scale))
+        nudge = float(np.spacing(max(1.0, float(np.max(np.abs(run.y0[block]))))))
         y0 = run.y0.copy()
         y0[index] += nudge
         variants[f"y0[{index}] + {nudge:.1e}"] = (dataclasses.replace(run, y0=y0), options)

@@ -344,10 +344,10 @@ def table(report: dict) -> str:
         f"records in memory {phases['records']:.0f}, file {phases['file_bytes'] / 1e6:.2f} MB",
     ]
     if "rounding_band" in report:
-        band, moved = report["rounding_band"]["band"], report["rounding_band"].get("moved")
-        variants = len(report["rounding_band"].get("variants", ()))
-        lines += ["", f"rounding band (largest relative change under rounding-level perturbations of the initial state and the tolerances; "
-                      f"{moved} of {variants} variants moved the run):", ""]
+        measured = report["rounding_band"]
+        moved = f"; {measured['moved']} of {len(measured['variants'])} variants moved the run" if "moved" in measured else ""
+        lines += ["", f"rounding band (largest relative change under rounding-level perturbations of the initial state and the tolerances{moved}):", ""]
+        band = measured["band"]
         lines += ["| quantity | band |", "|---|---:|"] + [f"| {name} | {value:.1e} |" for name, value in band.items()]
     return "\n".join(lines)
 
