@@ -295,24 +295,31 @@ def test_a_failing_laws_class_key_and_value_are_kept(misaligned, monkeypatch):
         D._raise_contact_error(dynamics, workspace, 1, twists, onset, 0.5, 3)
 
 
+@pytest.mark.parametrize("scene", ["compound_misaligned", "mixed", "four_bar_rocker_clearance"])
 @pytest.mark.parametrize("change", [-1, 1])
-def test_a_drive_with_the_wrong_number_of_values_is_refused(misaligned, change):
-    """4 or 6 values for the 5 actuators: the model and the workspace refuse the drive (the compiled calls would read past it)."""
+def test_a_drive_with_the_wrong_number_of_values_is_refused(scene_runs, scene, change):
+    """One value too few or too many for the motion actuators (5 on the 4-UPS/RPS' platform-pose drive, 2 joint
+    drives on the mixed-closure linkage, 1 on the four-bar): the model and the workspace refuse the drive (the
+    compiled calls would read past it); the right drive passes."""
+    run = scene_runs(scene)
+    n_actuators = len(run.mechanism.actuator_q_index)
 
     class Resized:
         def drive(self, t):
-            values = misaligned.dynamics.drive.drive(t)
-            return tuple(np.resize(a, a.size + change) for a in values)
+            return tuple(np.resize(np.atleast_1d(a), np.size(a) + change) for a in run.dynamics.drive.drive(t))
 
-    dynamics = dataclasses.replace(misaligned.dynamics, drive=Resized())
-    assert len(dynamics.mechanism.actuator_q_index) == 5
-    with pytest.raises(DriveError, match=rf"returns \[{5 + change}, {5 + change}, {5 + change}\] values .* has 5 motion-driven") as caught:
+    dynamics = dataclasses.replace(run.dynamics, drive=Resized())
+    size = n_actuators + change
+    with pytest.raises(DriveError, match=rf"returns \[{size}, {size}, {size}\] values .* has {n_actuators} motion-driven") as caught:
         D.make_workspace(dynamics)
     assert isinstance(caught.value, Error) and caught.value.key == "drive"
     laws = {contact.site.name: contact.law for contact in dynamics.contacts}
-    with pytest.raises(DriveError, match="motion-driven"):  # already when the model is made (the run's set-up)
-        D.make_dynamics_model(dynamics.mechanism, laws, Resized(), dynamics.baumgarte)
-    D.make_dynamics_model(dynamics.mechanism, laws, misaligned.dynamics.drive, dynamics.baumgarte)  # the right drive passes
+    frame = dynamics.mechanism.model.frames[dynamics.end_effector_frame].name
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", RedundantConstraintWarning)
+        with pytest.raises(DriveError, match="motion-driven"):  # already when the model is made (the run's set-up)
+            D.make_dynamics_model(dynamics.mechanism, laws, Resized(), dynamics.baumgarte, frame)
+        D.make_dynamics_model(dynamics.mechanism, laws, run.dynamics.drive, dynamics.baumgarte, frame)  # the right drive passes
 
 
 def test_compiled_right_hand_side_runs_as_plain_python():

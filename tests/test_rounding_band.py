@@ -63,17 +63,21 @@ def test_a_coordinate_outside_the_state_is_refused(slider_crank):
         perturbations(slider_crank, slider_crank.scene.solver, (size,))
 
 
-def test_every_nudge_is_one_ulp_of_its_blocks_scale(slider_crank):
-    """A coordinate at or near zero still moves by rounding's size for its block, at least one ulp of 1.0."""
-    run, nq, nv = slider_crank, slider_crank.mechanism.model.nq, slider_crank.mechanism.model.nv
+@pytest.mark.parametrize("scene", ["slider_crank_revolute", "rssr_rocker_clearance", "compound_misaligned"])
+def test_every_nudge_is_one_ulp_of_its_blocks_scale(scene_runs, scene):
+    """A coordinate at or near zero still moves by rounding's size for its block, at least one ulp of 1.0
+    (planar slider-crank, spatial RSSR linkage, the 4-UPS/RPS with its free bodies' quaternions)."""
+    run = scene_runs(scene)
+    nq, nv = run.mechanism.model.nq, run.mechanism.model.nv
     variants = perturbations(run, run.scene.solver, tuple(range(run.y0.shape[0])))
     nudged = [name for name in variants if name.startswith("y0[")]
     assert len(nudged) == nq + nv  # every q and v; the works are skipped
     for name in nudged:
-        moved = variants[name][0].y0 - run.y0
-        (index,) = np.flatnonzero(moved)
+        y0 = variants[name][0].y0
+        (index,) = np.flatnonzero(y0 != run.y0)
         block = slice(0, nq) if index < nq else slice(nq, nq + nv)
-        assert moved[index] == np.spacing(max(1.0, np.max(np.abs(run.y0[block])))) >= np.spacing(1.0)
+        nudge = np.spacing(max(1.0, np.max(np.abs(run.y0[block]))))
+        assert y0[index] == run.y0[index] + nudge and nudge >= np.spacing(1.0)
 
 
 def test_a_block_at_rest_is_nudged_by_one_ulp_of_one(slider_crank):
