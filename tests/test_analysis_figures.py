@@ -145,3 +145,17 @@ def test_distinct_points_edge_cases():
         distinct_points([1.0], 0.0)
     with pytest.raises(AnalysisError, match=r"points must be \(n_parameters=2, max_points\)"):
         BifurcationDiagram(np.array([1.0, 2.0]), np.zeros((3, 4)))
+
+
+def test_cell_edges_centre_each_value_in_its_cell_at_its_own_scale():
+    from robot.analysis.figures import cell_edges
+
+    # one value: a cell 10 % wide around it, whatever its size (a clearance of 0.5 mm, a speed of 60 rad/s)
+    for value in (5e-4, 60.0):
+        edges = cell_edges(np.array([value]))
+        assert np.allclose(edges, [0.95 * value, 1.05 * value], rtol=1e-12)
+        assert np.allclose(cell_edges(np.array([value]), "log"), value * np.exp([-0.05, 0.05]), rtol=1e-12)
+    assert np.array_equal(cell_edges(np.array([0.0])), [-0.5, 0.5])
+    # several: midpoints, geometric midpoints on a log axis, end cells as wide as their neighbours
+    assert np.allclose(cell_edges(np.array([1.0, 2.0, 4.0])), [0.5, 1.5, 3.0, 5.0])
+    assert np.allclose(cell_edges(np.array([1e-5, 1e-4, 1e-3]), "log"), 10.0 ** np.array([-5.5, -4.5, -3.5, -2.5]))

@@ -55,8 +55,9 @@ def cell_edges(centres: np.ndarray, scale: str = "linear") -> np.ndarray:
     """Edges of the cells around sorted ``centres``: midpoints, geometric on a log axis (so the cells of a
     log-spaced axis look equal on it); the end cells are as wide as their neighbours."""
     values = np.log(centres) if scale == "log" else np.asarray(centres, dtype=float)
-    if values.size == 1:
-        edges = values[0] + np.array([-0.5, 0.5]) * (1.0 if scale == "linear" else 0.1)
+    if values.size == 1:  # a cell 10 % wide around the value (+-0.05 in ln on a log axis); 1 wide around 0
+        half_width = 0.05 if scale == "log" else (0.05 * abs(values[0]) or 0.5)
+        edges = values[0] + np.array([-half_width, half_width])
     else:
         inner = 0.5 * (values[1:] + values[:-1])
         edges = np.concatenate([[2.0 * values[0] - inner[0]], inner, [2.0 * values[-1] - inner[-1]]])

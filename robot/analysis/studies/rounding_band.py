@@ -85,7 +85,7 @@ def perturbations(run: Run, options: SolverOptions, coordinates: tuple[int, ...]
         if not 0 <= index < run.y0.shape[0]:
             raise AnalysisError(f"coordinates: index {index} is outside the state (0 ... {run.y0.shape[0] - 1})")
         block = next((b for b in blocks if b.start <= index < b.stop), None)
-        if block is None or block.stop == block.start:
+        if block is None:  # an accumulator (the works), not a coordinate
             continue
         nudge = float(np.spacing(max(1.0, float(np.max(np.abs(run.y0[block]))))))
         y0 = run.y0.copy()

@@ -345,9 +345,8 @@ def table(report: dict) -> str:
     ]
     if "rounding_band" in report:
         measured = report["rounding_band"]
-        moved = f"; {measured['moved']} of {len(measured['variants'])} variants moved the run" if "moved" in measured else ""
-        lines += ["", f"rounding band (largest relative change under rounding-level perturbations of the initial state and the tolerances{moved}):", ""]
-        band = measured["band"]
+        band, moved = measured["band"], f"{measured['moved']} of {len(measured['variants'])} variants moved the run"
+        lines += ["", f"rounding band (largest relative change under rounding-level perturbations of the initial state and the tolerances; {moved}):", ""]
         lines += ["| quantity | band |", "|---|---:|"] + [f"| {name} | {value:.1e} |" for name, value in band.items()]
     return "\n".join(lines)
 

@@ -17,7 +17,8 @@ Error measures (``errors``)
     * ``impulse``: the same for the normal-force impulses;
     * ``driving_rms``: max over actuators of |rms F - rms F_ref| / rms F_ref over [0, T];
     * ``drift``: the run's own max |Phi| (m);
-    * ``energy``: the run's own max |Delta(T + V) - W_act - W_contact| (J), and
+    * ``energy``: the run's own max |Delta(T + V) - W_act - W_contact - W_force| (J; ``W_force``:
+      the force elements' work, where there are any), and
       relative to max |W_act|.
 
 Sweep
