@@ -299,8 +299,8 @@ def test_a_failing_laws_class_key_and_value_are_kept(misaligned, monkeypatch):
 @pytest.mark.parametrize("change", [-1, 1])
 def test_a_drive_with_the_wrong_number_of_values_is_refused(scene_runs, scene, change):
     """One value too few or too many for the motion actuators (5 on the 4-UPS/RPS' platform-pose drive, 2 joint
-    drives on the mixed-closure linkage, 1 on the four-bar): the model and the workspace refuse the drive (the
-    compiled calls would read past it); the right drive passes."""
+    drives on the mixed-closure linkage, 1 on the four-bar): every dynamics model refuses the drive, made by
+    ``make_dynamics_model`` or ``dataclasses.replace`` (the compiled calls would read past it); the right one passes."""
     run = scene_runs(scene)
     n_actuators = len(run.mechanism.actuator_q_index)
 
@@ -308,11 +308,11 @@ def test_a_drive_with_the_wrong_number_of_values_is_refused(scene_runs, scene, c
         def drive(self, t):
             return tuple(np.resize(np.atleast_1d(a), np.size(a) + change) for a in run.dynamics.drive.drive(t))
 
-    dynamics = dataclasses.replace(run.dynamics, drive=Resized())
     size = n_actuators + change
     with pytest.raises(DriveError, match=rf"returns \[{size}, {size}, {size}\] values .* has {n_actuators} motion-driven") as caught:
-        D.make_workspace(dynamics)
+        dataclasses.replace(run.dynamics, drive=Resized())
     assert isinstance(caught.value, Error) and caught.value.key == "drive"
+    dynamics = run.dynamics
     laws = {contact.site.name: contact.law for contact in dynamics.contacts}
     frame = dynamics.mechanism.model.frames[dynamics.end_effector_frame].name
     with warnings.catch_warnings():

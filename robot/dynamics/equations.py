@@ -113,6 +113,10 @@ class DynamicsModel:
     end_effector_frame: int = -1
     forces: ForceSet | None = None  # force elements and force-driven actuators (robot.dynamics.forces)
 
+    def __post_init__(self) -> None:
+        # every model, however made (dataclasses.replace too): the compiled calls read the drive unchecked
+        check_drive_size(self)
+
     @property
     def n_work(self) -> int:
         """Work accumulators after ``[q, v]``: actuators, contact, and force elements when there are any."""
@@ -160,9 +164,7 @@ def make_dynamics_model(
         contacts.append(ContactSite(site, law, offset))
         offset += law.n_candidates
     ee = mechanism.frame_id(end_effector_frame or "platform")
-    dynamics = DynamicsModel(mechanism, C.constraint_set(mechanism, driven=True), tuple(contacts), drive, baumgarte, ee, forces)
-    check_drive_size(dynamics)  # a wrong drive is bad input of the run's set-up (``clearance run --check`` finds it)
-    return dynamics
+    return DynamicsModel(mechanism, C.constraint_set(mechanism, driven=True), tuple(contacts), drive, baumgarte, ee, forces)
 
 
 @dataclass
@@ -182,8 +184,7 @@ class DynamicsWorkspace:
 
 
 def make_workspace(dynamics: DynamicsModel) -> DynamicsWorkspace:
-    """The per-run state of ``dynamics``; raises :class:`robot.errors.DriveError` if its drive does not fit the mechanism."""
-    check_drive_size(dynamics)
+    """The per-run state of ``dynamics``."""
     model = dynamics.mechanism.model
     data = model.createData()
     kernel = C.ConstraintKernel(dynamics.constraints, data)
@@ -201,9 +202,10 @@ def make_workspace(dynamics: DynamicsModel) -> DynamicsWorkspace:
 def check_drive_size(dynamics: DynamicsModel) -> None:
     """Raise :class:`robot.errors.DriveError` unless the drive gives one value of s, sd and sdd per motion actuator.
 
-    Checked at t = 0 when the dynamics model is made and again when a workspace is
-    made (a model may be rebuilt with another drive): the compiled right-hand side reads
-    the drive's values without bounds checks (:func:`robot.dynamics.rhs_kernels.power_series`).
+    Checked at t = 0 whenever a :class:`DynamicsModel` is made (``dataclasses.replace``
+    included), so a run's set-up (``clearance run --check``) refuses a wrong drive: the
+    compiled right-hand side reads the drive's values without bounds checks
+    (:func:`robot.dynamics.rhs_kernels.power_series`).
     """
     mechanism = dynamics.mechanism
     expected = len(mechanism.actuator_q_index) if dynamics.constraints.driven else 0

@@ -402,24 +402,6 @@ def all_sites(placements, J, v, onset_rates, tau, table, masks, parameters, outp
     return 0
 
 
-@jit
-def probe_sites(placements, J, v, onset_rates, tau, table, masks, parameters, outputs, twists, gather, penetration, penetration_rate, normal_force):
-    """:func:`all_sites`, then every candidate's penetration, its rate and normal force (the step loop's probe, one call).
-
-    ``gather`` (n_candidates, 3) int64: per candidate the indices of its
-    penetration, penetration rate and normal force in ``outputs``. Returns
-    :func:`all_sites`' code (the three arrays are then not written).
-    """
-    code = all_sites(placements, J, v, onset_rates, tau, table, masks, parameters, outputs, twists)
-    if code != 0:
-        return code
-    for j in range(gather.shape[0]):
-        penetration[j] = outputs[gather[j, 0]]
-        penetration_rate[j] = outputs[gather[j, 1]]
-        normal_force[j] = outputs[gather[j, 2]]
-    return 0
-
-
 #: slots of the packed arrays of one compiled right-hand side (:func:`pack`, ``CompiledTerms``): int64 ...
 (
     FRAMES_A, FRAMES_B, CLOSURE_ROWS, ACTUATOR_Q, ACTUATOR_V, CLOSURE_MASKS, SITE_TABLE, SITE_MASKS, PROBE_GATHER,
@@ -532,8 +514,11 @@ def finish_derivative(work, indices, multipliers, first_driving_row, v, qdd, con
 def probe_terms(
     work, indices, placements, J, q, v, drive_coefficients, x, onset_rates, penetration, penetration_rate, normal_force, residual
 ):
-    """:func:`probe_sites` and, if ``residual``, :func:`largest_residual` (else NaN; the drive as in :func:`rhs_terms`),
-    in one call: ``(code, max |Phi|)``."""
+    """Every clearance joint's laws (:func:`all_sites`, on the packed arrays) with each candidate's penetration,
+    its rate and normal force gathered into the three arrays (``PROBE_GATHER``: per candidate the indices of the
+    three in ``LAW_OUTPUTS``), and, if ``residual``, :func:`largest_residual` (else NaN; the drive as in
+    :func:`rhs_terms`), in one call: ``(code, max |Phi|)``; with ``code != 0`` (:func:`all_sites`' code) the three
+    arrays are not written."""
     worst = np.nan
     if residual:
         drive = _flat(work, indices, DRIVE)
@@ -542,10 +527,12 @@ def probe_terms(
             placements, _flat(indices, indices, FRAMES_A), _flat(indices, indices, FRAMES_B), _flat(indices, indices, CLOSURE_ROWS),
             q, drive, _flat(indices, indices, ACTUATOR_Q),
         )  # fmt: skip
-    code = probe_sites(
-        placements, J, v, onset_rates, _flat(work, indices, TAU), _matrix(indices, indices, SITE_TABLE),
-        _cube(indices, indices, SITE_MASKS),
-        _flat(work, indices, LAW_PARAMETERS), _flat(work, indices, LAW_OUTPUTS), _cube(work, indices, SITE_TWISTS),
-        _matrix(indices, indices, PROBE_GATHER), penetration, penetration_rate, normal_force,
-    )  # fmt: skip
+    code = _packed_sites(work, indices, placements, J, v, onset_rates, _flat(work, indices, TAU))
+    if code != 0:
+        return code, worst
+    outputs, gather = _flat(work, indices, LAW_OUTPUTS), _matrix(indices, indices, PROBE_GATHER)
+    for j in range(gather.shape[0]):
+        penetration[j] = outputs[gather[j, 0]]
+        penetration_rate[j] = outputs[gather[j, 1]]
+        normal_force[j] = outputs[gather[j, 2]]
     return code, worst
