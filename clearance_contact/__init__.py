@@ -2,10 +2,12 @@
 
 Poses and velocities in, wrenches out (SI units, world axes); the interface
 contract is ``docs/contact-api.md``.  The laws are compiled with numba when it is
-installed (``CLEARANCE_CONTACT_JIT=0`` disables it); without it the same code runs
-as plain Python.
+installed, ahead of time into the kernel library when it has been built
+(``CLEARANCE_CONTACT_JIT=numba`` uses numba's JIT, ``=0`` disables both); without
+either the same code runs as plain Python.
 
-* :mod:`.compiled`: ``jit``, ``JIT_ENABLED``, the kernels' ``STATUS_*`` codes;
+* :mod:`.compiled`: ``jit``, ``JIT_ENABLED``, ``KERNEL_MODE``, the kernels' ``STATUS_*`` codes;
+* :mod:`.kernel_library`: the kernels compiled ahead of time, loaded without numba;
 
 * :mod:`.errors`: ``ContactError``, ``ContactParameterError``;
 * :mod:`.materials`: ``Material`` and Hertz-type stiffnesses;

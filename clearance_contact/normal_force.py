@@ -54,7 +54,7 @@ EXPONENT_RANGE: tuple[float, float] = (1.0, 1.5)
 """Valid range of the force exponent n (seed paper: "n ranges from 1 to 3/2")."""
 
 
-@jit
+@jit(exports=("f8(f8)",))
 def hysteresis_factor(restitution: float) -> float:
     """Return the L-N damping factor 3 (1 - c_e^2) / 4 (dimensionless)."""
     return 0.75 * (1.0 - restitution * restitution)

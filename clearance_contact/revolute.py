@@ -553,7 +553,11 @@ def revolute_wrenches(outer_position, inner_position, out):
     _write3(out, WRENCH_INNER + 3, mix, miy, miz)
 
 
-@jit
+@jit(exports=(
+        "i8(f8[::1], f8[:, ::1], f8[::1], f8[:, ::1], f8[::1], f8[::1])",
+        "i8(f8[::1], f8[::1, :], f8[::1], f8[:, ::1], f8[::1], f8[::1])",
+        "i8(f8[::1], f8[::1, :], f8[::1], f8[::1, :], f8[::1], f8[::1])",
+    ))
 def revolute_penetration_kernel(parameters, outer_rotation, outer_position, inner_rotation, inner_position, out):
     """``out[0:4]`` = deepest penetration (m) of [top_radial, top_axial, bottom_radial, bottom_axial].
 
@@ -593,7 +597,10 @@ def revolute_penetration_kernel(parameters, outer_rotation, outer_position, inne
     return STATUS_OK
 
 
-@jit
+@jit(exports=(
+        "i8(f8[::1], f8[::1, :], f8[::1], f8[::1], f8[:, ::1], f8[::1], f8[::1], f8[::1], f8[::1])",
+        "i8(f8[::1], f8[::1, :], f8[::1], f8[::1], f8[::1, :], f8[::1], f8[::1], f8[::1], f8[::1])",
+    ))
 def revolute_kernel(
     parameters, outer_rotation, outer_position, outer_twist, inner_rotation, inner_position, inner_twist, onset_rates, out
 ):

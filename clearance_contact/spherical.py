@@ -174,7 +174,10 @@ def spherical_wrenches(parameters, out):
             out[WRENCH_OUTER + i] = 0.0
 
 
-@jit
+@jit(exports=(
+        "i8(f8[::1], f8[::1, :], f8[::1], f8[::1], f8[:, ::1], f8[::1], f8[::1], f8[::1], f8[::1])",
+        "i8(f8[::1], f8[::1, :], f8[::1], f8[::1], f8[::1, :], f8[::1], f8[::1], f8[::1], f8[::1])",
+    ))
 def spherical_kernel(
     parameters, outer_rotation, outer_position, outer_twist, inner_rotation, inner_position, inner_twist, onset_rates, out
 ):
@@ -284,7 +287,11 @@ def spherical_kernel(
     return STATUS_OK
 
 
-@jit
+@jit(exports=(
+        "i8(f8[::1], f8[:, ::1], f8[::1], f8[:, ::1], f8[::1], f8[::1])",
+        "i8(f8[::1], f8[::1, :], f8[::1], f8[:, ::1], f8[::1], f8[::1])",
+        "i8(f8[::1], f8[::1, :], f8[::1], f8[::1, :], f8[::1], f8[::1])",
+    ))
 def spherical_penetration_kernel(parameters, outer_rotation, outer_position, inner_rotation, inner_position, out):
     """``out[0]`` = delta = |b - s| - c (m); returns ``STATUS_OK`` or ``STATUS_NONFINITE_PENETRATION``."""
     ex = inner_position[0] - outer_position[0]

@@ -272,7 +272,11 @@ def _corner_in_guide(parameters, c, outer_rotation, outer_position, inner_rotati
     return px, py, pz, delta, j, side
 
 
-@jit
+@jit(exports=(
+        "i8(f8[::1], f8[:, ::1], f8[::1], f8[:, ::1], f8[::1], f8[::1])",
+        "i8(f8[::1], f8[::1, :], f8[::1], f8[:, ::1], f8[::1], f8[::1])",
+        "i8(f8[::1], f8[::1, :], f8[::1], f8[::1, :], f8[::1], f8[::1])",
+    ))
 def translational_penetration_kernel(parameters, outer_rotation, outer_position, inner_rotation, inner_position, out):
     """``out[c]`` = delta of every candidate (m); returns ``STATUS_OK`` or ``STATUS_NONFINITE_PENETRATION``."""
     k = int(parameters[_P_COUNT])
@@ -286,7 +290,10 @@ def translational_penetration_kernel(parameters, outer_rotation, outer_position,
     return STATUS_OK
 
 
-@jit
+@jit(exports=(
+        "i8(f8[::1], f8[::1, :], f8[::1], f8[::1], f8[:, ::1], f8[::1], f8[::1], f8[::1], f8[::1])",
+        "i8(f8[::1], f8[::1, :], f8[::1], f8[::1], f8[::1, :], f8[::1], f8[::1], f8[::1], f8[::1])",
+    ))
 def translational_kernel(
     parameters, outer_rotation, outer_position, outer_twist, inner_rotation, inner_position, inner_twist, onset_rates, out
 ):

@@ -169,7 +169,7 @@ def simulate(
 
 
 def compile_kernels(run: Run) -> float:
-    """Integrate the run over its first microsecond so numba compiles (or loads from its cache) the kernels.
+    """Integrate the run over its first microsecond so the kernels are ready (the library's loaded; numba's compiled or loaded from its cache).
 
     Returns the CPU seconds this took: the first-call compilation that would
     otherwise be counted in the run's ``cpu_time`` (reported apart as

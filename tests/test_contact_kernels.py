@@ -369,7 +369,8 @@ def test_compiled_matches_plain_python_run() -> None:
 
 
 def test_imports_and_works_without_numba(tmp_path: Path) -> None:
-    """numba unavailable (sys.modules['numba'] = None via sitecustomize): plain Python, same API."""
+    """numba unavailable (sys.modules['numba'] = None via sitecustomize) and no kernel library:
+    plain Python, same API. (With a library and no numba: tests/test_kernel_library.py.)"""
     (tmp_path / "sitecustomize.py").write_text("import sys\nsys.modules['numba'] = None\n")
     code = """
 import numpy as np
@@ -388,7 +389,7 @@ res = rev.evaluate(np.eye(3), s, np.zeros(6), np.eye(3), np.array([1.05e-4, 0, 0
 assert res.kind.tolist() == [2, 0, 2, 0]
 print("ok")
 """
-    proc = _run(["-c", code], None, {"PYTHONPATH": f"{tmp_path}{os.pathsep}{ROOT}"})
+    proc = _run(["-c", code], None, {"PYTHONPATH": f"{tmp_path}{os.pathsep}{ROOT}", "CLEARANCE_KERNEL_DIR": str(tmp_path / "no library")})
     assert proc.returncode == 0 and proc.stdout.strip() == "ok", proc.stderr[-4000:]
 
 

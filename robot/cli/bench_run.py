@@ -4,6 +4,7 @@ examples:
   clearance bench-run                                       # compound_misaligned, 5 repeats, results/bench_run.json
   clearance bench-run --scene revolute --repeats 7 --out /tmp/bench_run.json
   clearance bench-run --compare results/bench_run_before.json   # also a before/after table
+  clearance bench-run --kernels numba --out /tmp/numba.json      # numba's just-in-time kernels instead of the library
 
 Per repeat, the command itself in a fresh process (wall time, CPU time, peak
 memory) and a worker process that does what the command does and times each
@@ -36,6 +37,12 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--out", type=Path, default=DEFAULT_OUT, help=f"JSON report (default: {DEFAULT_OUT}); the table beside it (.md)")
     parser.add_argument("--compare", type=Path, default=None, help="an earlier report of this command: add a before/after table")
     parser.add_argument(
+        "--kernels",
+        choices=("library", "numba"),
+        default="library",
+        help="the kernel library (default, what a run uses) or numba's just-in-time kernels (CLEARANCE_CONTACT_JIT=numba)",
+    )
+    parser.add_argument(
         "--rounding-band",
         action="store_true",
         help="also measure the scene's rounding band: how far peak forces, impulses and the step count move under 1-ulp "
@@ -56,7 +63,7 @@ def execute(args: argparse.Namespace) -> int:
             before = json.loads(Path(args.compare).read_text())
         except (OSError, ValueError) as exc:
             raise UsageError(f"--compare={str(args.compare)!r} is not a report of this command ({exc})") from None
-    report = benchmark(str(args.scene), args.repeats, progress=lambda line: print(line, file=sys.stderr, flush=True))
+    report = benchmark(str(args.scene), args.repeats, progress=lambda line: print(line, file=sys.stderr, flush=True), kernels=args.kernels)
     if args.rounding_band:
         report["rounding_band"] = _rounding_band(str(args.scene))
     report["table"] = table(report)

@@ -17,7 +17,7 @@ import traceback
 from typing import NoReturn
 
 from robot.cli.common import EXIT_BAD_INPUT, EXIT_CODES_HELP, EXIT_INTERNAL, EXIT_INTERRUPTED
-from robot.cli.registry import COMMANDS, SUMMARIES
+from robot.cli.registry import COMMANDS, KERNEL_COMMANDS, SUMMARIES
 
 EXAMPLES = """examples:
   clearance paper                                   # the seed paper's study into results/paper
@@ -70,7 +70,12 @@ def main(argv: list[str] | None = None) -> int:
     from robot.errors import RobotError
 
     argv = sys.argv[1:] if argv is None else list(argv)
-    parser = build_parser(_command_of(argv))
+    command = _command_of(argv)
+    if command in KERNEL_COMMANDS and not {"-h", "--help"} & set(argv):
+        from robot.dynamics.kernel_build import ensure_library
+
+        ensure_library()  # before the command imports a kernel: its process then loads the library, not numba
+    parser = build_parser(command)
     try:
         args = parser.parse_args(argv)
     except SystemExit as exc:  # --help (0) or a bad option (2)

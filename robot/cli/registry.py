@@ -21,7 +21,15 @@ COMMANDS: dict[str, str] = {
     "build-urdf": "robot.cli.build_urdf",
     "sweep": "robot.cli.sweep",
     "bench-sweep": "robot.cli.bench_sweep",
+    "build-kernels": "robot.cli.build_kernels",
 }
+
+#: commands that call compiled kernels: the kernel library is made ready (built if stale) before
+#: their module is imported, so that the command's process loads it instead of numba
+#: (robot.dynamics.kernel_build.ensure_library)
+KERNEL_COMMANDS: frozenset[str] = frozenset(
+    {"run", "paper", "animate", "validate", "bench", "bench-run", "contact-laws", "work-precision", "sweep", "bench-sweep"}
+)
 
 #: one-line help of each command, for ``clearance --help`` without importing the modules
 SUMMARIES: dict[str, str] = {
@@ -37,4 +45,5 @@ SUMMARIES: dict[str, str] = {
     "build-urdf": "regenerate urdf/ups_rps.urdf from the design parameters",
     "sweep": "run a parameter sweep on dask, stored as an xarray dataset in zarr",
     "bench-sweep": "benchmark of the sweep engine: runs per minute, parallel efficiency, overhead",
+    "build-kernels": "compile the kernel library ahead of time (runs then load it without numba)",
 }

@@ -107,7 +107,10 @@ def add_site_stiffness(placements, J, masks, frame_outer, frame_inner, derivativ
     _chain(derivative, 12, G, dtau_dtwist)
 
 
-@jit
+@jit(exports=(
+        "i8(i8, f8[::1], f8[:, ::1], f8[::1, :], i8[:, ::1], i8, i8, f8[::1], f8[:, ::1], f8[::1], i8, i8, f8[:, ::1], f8[:, ::1],"
+        " Tuple((f8[:, :, ::1], f8[:, ::1], f8[:, ::1], f8[::1])), f8[:, ::1], f8[:, ::1])",
+    ))
 def site_stiffness(law_id, parameters, placements, J, masks, frame_outer, frame_inner, onset, twists, out, wrench_outer, wrench_inner, derivative, G, perturbed, dtau_dpose, dtau_dtwist):
     """Add one clearance joint's ``dtau_c/dxi`` and ``dtau_c/dv`` (zero out of contact); returns the law's status.
 

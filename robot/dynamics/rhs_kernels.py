@@ -53,15 +53,14 @@ import numpy as np
 import pinocchio as pin
 from numpy.typing import ArrayLike
 
-from clearance_contact.compiled import JIT_ENABLED, drop_stale_caches, jit
+from clearance_contact.compiled import jit, watch_numba_cache
 from clearance_contact.revolute import RevoluteClearanceJoint, revolute_kernel
 from clearance_contact.spherical import SphericalClearanceJoint, spherical_kernel
 from clearance_contact.translational import TranslationalClearanceJoint, translational_kernel
 
-if JIT_ENABLED:
-    # this package's compiled code calls clearance_contact's law kernels (see drop_stale_caches)
-    _ROBOT = Path(__file__).resolve().parent
-    drop_stale_caches([*_ROBOT.glob("*.py"), *(_ROBOT.parents[1] / "clearance_contact").glob("*.py")], _ROBOT / "__pycache__")
+# this package's compiled code calls clearance_contact's law kernels (see drop_stale_caches)
+_ROBOT = Path(__file__).resolve().parent
+watch_numba_cache([*_ROBOT.glob("*.py"), *(_ROBOT.parents[1] / "clearance_contact").glob("*.py")], _ROBOT / "__pycache__")
 
 SE3_FLOATS = 12  # 3x3 rotation (column-major) + translation
 
@@ -293,7 +292,7 @@ def write_powers(multipliers, first_driving_row, v, actuator_v, tau, out, offset
     out[offset + 1] = power
 
 
-@jit
+@jit(exports=("f8(f8[:, ::1], i8[::1], i8[::1], i8[::1], f8[::1], f8[::1], i8[::1])",))
 def largest_residual(placements, frames_a, frames_b, closure_rows, q, drive, actuator_q):
     """max |Phi| over the closures (``p_a - p_b``; a revolute closure's ``z_a . x_b``, ``z_a . y_b``)
     and the drivers (``q_k - s_k``); NaN if any is NaN."""
@@ -319,7 +318,7 @@ def largest_residual(placements, frames_a, frames_b, closure_rows, q, drive, act
     return worst
 
 
-@jit
+@jit(exports=("void(f8[:, ::1], f8, f8[::1])",))
 def power_series(coefficients, x, out):
     """out[j] = sum_k coefficients[k, j] x^k (Horner's rule), for every j of ``out``.
 
@@ -462,7 +461,7 @@ def _cube(buffer, indices, slot):
     return _flat(buffer, indices, slot).reshape((indices[4 * slot + 1], indices[4 * slot + 2], indices[4 * slot + 3]))
 
 
-@jit
+@jit(exports=("i8(f8[::1], i8[::1], f8[:, ::1], f8[::1, :], f8[::1, :], f8[::1], f8[::1], f8[:, ::1], f8, f8[::1], f8[:, ::1])",))
 def rhs_terms(work, indices, placements, J, dJ, q, v, drive_coefficients, x, onset_rates, phi_q):
     """The compiled terms of one right-hand side before its KKT solve, in one call (packed arrays, :func:`pack`).
 
@@ -494,7 +493,7 @@ def _packed_sites(work, indices, placements, J, v, onset_rates, tau):
     )  # fmt: skip
 
 
-@jit
+@jit(exports=("void(f8[::1], i8[::1], f8[::1], i8, f8[::1], f8[::1], f8[::1], f8[::1])",))
 def finish_derivative(work, indices, multipliers, first_driving_row, v, qdd, configuration_rate, out):
     """``out = [q', qdd, actuator power, contact power]`` (:func:`write_powers`) after the KKT solve (one call).
 
@@ -510,7 +509,7 @@ def finish_derivative(work, indices, multipliers, first_driving_row, v, qdd, con
     write_powers(multipliers, first_driving_row, v, _flat(indices, indices, ACTUATOR_V), _flat(work, indices, TAU), out, nq + nv)
 
 
-@jit
+@jit(exports=("Tuple((i8, f8))(f8[::1], i8[::1], f8[:, ::1], f8[::1, :], f8[::1], f8[::1], f8[:, ::1], f8, f8[::1], f8[::1], f8[::1], f8[::1], b1)",))
 def probe_terms(
     work, indices, placements, J, q, v, drive_coefficients, x, onset_rates, penetration, penetration_rate, normal_force, residual
 ):

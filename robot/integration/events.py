@@ -27,7 +27,7 @@ ONSET, HIDDEN, OVER_BOUND, PEAK = 1, 2, 4, 8
 HIDDEN_SAMPLES = 8
 
 
-@jit
+@jit(exports=("b1(f8[::1])",))
 def all_finite(values) -> bool:
     for x in values:
         if not math.isfinite(x):
@@ -35,7 +35,7 @@ def all_finite(values) -> bool:
     return True
 
 
-@jit
+@jit(exports=("i8(f8[::1], f8[::1], f8[::1], f8[::1], f8[::1])",))
 def step_flags(pen_old, rate_old, pen_new, rate_new, bounds) -> int:
     """Bit flags over the contact candidates, from the step's end points.
 

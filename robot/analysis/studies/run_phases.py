@@ -8,7 +8,7 @@ Two measurements, each repeated in fresh processes (medians over the repeats):
 * **phases**: a worker process (:func:`worker`) that does what the command does,
   phase by phase, and times each with ``time.process_time`` (CPU, robust on a
   loaded machine): ``imports`` (the modules the command imports), ``build``
-  (scene, mechanism, initial state), ``compile`` (numba's cache load),
+  (scene, mechanism, initial state), ``compile`` (the kernels' first call: the library's, or numba's cache load),
   ``integrate`` (the step loop), ``outputs`` (:func:`robot.io.results.make_result`),
   ``write`` (the result file). Then the same integration again with timers around
   the step loop's parts (exclusive CPU time of each: the right-hand side, the
@@ -159,7 +159,7 @@ def _floor(run, trajectory, sample_every: int = 4) -> dict:
 
 #: what the command imports (timed by the worker's launcher before anything else is imported)
 COMMAND_MODULES = ("robot.cli.main", "robot.cli.run", "robot.run", "robot.cli.outputs")
-#: the worker's launcher: times the command's imports first (importing this module loads numpy and numba)
+#: the worker's launcher: times the command's imports first (importing this module loads numpy, and numba without the kernel library)
 _LAUNCHER = (
     "import gc; gc.disable()\n"  # as the command: the collector off during the imports and the build
     "import time, json; start = time.process_time()\n"
@@ -215,8 +215,12 @@ def worker(scene: str, out_dir: str, imports: float) -> dict:
     step_loop = {phase: max(spent - overhead * parts.calls[phase], 0.0) for phase, spent in parts.spent.items()}
     step_loop["timers (subtracted)"] = overhead * sum(parts.calls.values())
     floor = _floor(run, trajectory)
+    from clearance_contact import compiled
+
     return {
         "scene": scene,
+        "kernels": compiled.KERNEL_MODE,
+        "switched_by": compiled.SWITCHED_BY,
         "phases": phases,
         "run_cpu": sum(phases.values()),
         "step_loop": step_loop,
@@ -230,20 +234,25 @@ def worker(scene: str, out_dir: str, imports: float) -> dict:
     }
 
 
-def _child_env() -> dict:
+KERNEL_MODES = ("library", "numba")
+"""What ``kernels`` may ask for: the kernel library (the default of a run), or numba's just-in-time kernels."""
+
+
+def _child_env(kernels: str = "library") -> dict:
     root = Path(__file__).resolve().parents[3]
     env = dict(os.environ)
+    env["CLEARANCE_CONTACT_JIT"] = "numba" if kernels == "numba" else "1"
     env["PYTHONPATH"] = os.pathsep.join([str(root), env.get("PYTHONPATH", "")]).rstrip(os.pathsep)
     return env
 
 
-def measure_process(scene: str, python: str = sys.executable) -> dict:
+def measure_process(scene: str, python: str = sys.executable, kernels: str = "library") -> dict:
     """Wall, CPU and peak memory of one ``python scripts/simulate.py --scene NAME`` (fresh process)."""
     root = Path(__file__).resolve().parents[3]
     with tempfile.TemporaryDirectory(prefix="bench-run-") as out:
         command = [python, str(root / "scripts" / "simulate.py"), "--scene", scene, "--out", out]
         start = time.perf_counter()
-        process = subprocess.Popen(command, env=_child_env(), stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+        process = subprocess.Popen(command, env=_child_env(kernels), stdout=subprocess.PIPE, stderr=subprocess.PIPE)
         _, status, usage = os.wait4(process.pid, 0)
         wall = time.perf_counter() - start
         stdout, stderr = process.stdout.read().decode(), process.stderr.read().decode()
@@ -255,11 +264,11 @@ def measure_process(scene: str, python: str = sys.executable) -> dict:
     return {"wall_s": wall, "cpu_s": usage.ru_utime + usage.ru_stime, "peak_mib": usage.ru_maxrss / 1024.0, "stdout": stdout.strip()}
 
 
-def measure_phases(scene: str, python: str = sys.executable) -> dict:
+def measure_phases(scene: str, python: str = sys.executable, kernels: str = "library") -> dict:
     """:func:`worker` in a fresh process."""
     with tempfile.TemporaryDirectory(prefix="bench-run-") as out:
         command = [python, "-c", _LAUNCHER.format(modules=COMMAND_MODULES, scene=scene, out=out)]
-        done = subprocess.run(command, env=_child_env(), capture_output=True, text=True)
+        done = subprocess.run(command, env=_child_env(kernels), capture_output=True, text=True)
     if done.returncode != 0:
         raise RuntimeError(f"phase worker failed ({done.returncode}):\n{done.stderr}")
     return json.loads(done.stdout.strip().splitlines()[-1])
@@ -291,16 +300,20 @@ def compile_bytecode(python: str = sys.executable) -> None:
         warnings.warn(f"bench-run: could not write the project's bytecode, imports are timed with compilation ({done.stderr.strip()[:200]})", stacklevel=2)
 
 
-def benchmark(scene: str, repeats: int = 5, python: str = sys.executable, progress: Callable[[str], None] | None = None) -> dict:
+def benchmark(
+    scene: str, repeats: int = 5, python: str = sys.executable, progress: Callable[[str], None] | None = None, kernels: str = "library"
+) -> dict:
     """``repeats`` fresh-process runs of the command and of the phase worker, alternated; medians and samples.
 
-    The project's bytecode is written first (:func:`compile_bytecode`).
+    The project's bytecode is written first (:func:`compile_bytecode`). ``kernels``: one
+    of :data:`KERNEL_MODES` (the processes' ``CLEARANCE_CONTACT_JIT``); the report's
+    ``phases.kernels`` says what the worker ran.
     """
     compile_bytecode(python)
     process, phases = [], []
     for i in range(repeats):
-        process.append(measure_process(scene, python))
-        phases.append(measure_phases(scene, python))
+        process.append(measure_process(scene, python, kernels))
+        phases.append(measure_phases(scene, python, kernels))
         if progress is not None:
             progress(f"repeat {i + 1}/{repeats}: process wall {process[-1]['wall_s']:.2f} s, cpu {process[-1]['cpu_s']:.2f} s, "
                      f"integration/floor {phases[-1]['integration_over_floor']:.2f}")
@@ -321,7 +334,8 @@ def table(report: dict) -> str:
     phases, process = report["phases"], report["process"]
     run_cpu = sum(phases["phases"].values())
     lines = [
-        f"scene {report['scene']}, medians of {report['repeats']} fresh processes (load average {report['load_average'][0]:.1f} on {report['cpus']} CPUs)",
+        f"scene {report['scene']}, kernels {phases.get('kernels', 'numba')}, medians of {report['repeats']} fresh processes "
+        f"(load average {report['load_average'][0]:.1f} on {report['cpus']} CPUs)",
         "",
         f"whole process: wall {process['wall_s']:.2f} s, CPU {process['cpu_s']:.2f} s, peak memory {process['peak_mib']:.0f} MiB",
         "",

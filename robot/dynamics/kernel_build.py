@@ -1,0 +1,106 @@
+"""This project's kernel library: which modules it is built from, and making it ready before a command runs.
+
+The library (:mod:`clearance_contact.kernel_library`) holds every kernel whose ``jit``
+declares ``exports``: the contact laws and penetrations of ``clearance_contact`` and
+the right-hand side, probe, Jacobian and event kernels of ``robot``. A command that
+calls them first makes sure it is fresh (:func:`ensure_library`); a stale or missing
+library is compiled once, in a separate process (numba must be imported to compile,
+and the command's own process should never import it), so the command itself then
+runs on the library. Where that cannot be done (numba.pycc or a C compiler missing,
+a read-only folder) the command runs with numba's just-in-time kernels, as before,
+after saying why once.
+
+``python -m robot.dynamics.kernel_build [--force]`` builds it (what ``clearance
+build-kernels`` runs).
+"""
+
+from __future__ import annotations
+
+import importlib
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+#: modules whose ``jit(exports=...)`` kernels go into the library (their callees come with them)
+KERNEL_MODULES: tuple[str, ...] = (
+    "clearance_contact.normal_force",
+    "clearance_contact.spherical",
+    "clearance_contact.revolute",
+    "clearance_contact.translational",
+    "robot.dynamics.rhs_kernels",
+    "robot.dynamics.jacobian_kernels",
+    "robot.integration.events",
+)
+
+#: the environment variable of :mod:`clearance_contact.compiled`; "0" or "numba" leave the library alone
+MODE_VARIABLE = "CLEARANCE_CONTACT_JIT"
+
+
+def library_wanted() -> bool:
+    """False when the environment asks for plain Python (``0``) or numba's JIT (``numba``)."""
+    return os.environ.get(MODE_VARIABLE, "1") not in ("0", "numba")
+
+
+def library_is_fresh() -> bool:
+    """A library built from today's sources is in :func:`clearance_contact.kernel_library.library_folder`."""
+    from clearance_contact.kernel_library import is_fresh
+
+    return is_fresh()
+
+
+def build_library(force: bool = False) -> Path:
+    """Compile the library (this process must run numba: ``CLEARANCE_CONTACT_JIT=numba``); the manifest's path."""
+    from clearance_contact import compiled, kernel_library
+
+    if compiled.KERNEL_MODE != "numba":
+        raise kernel_library.KernelLibraryError(
+            f"building the kernel library needs numba's kernels in this process (kernel mode is {compiled.KERNEL_MODE!r}); "
+            f"run it with {MODE_VARIABLE}=numba, as `clearance build-kernels` does"
+        )
+    for name in KERNEL_MODULES:
+        importlib.import_module(name)
+    kernels = {name: (kernel.dispatcher, kernel.exports) for name, kernel in compiled.KERNELS.items() if kernel.exports}
+    return kernel_library.build(kernels, force=force)
+
+
+def ensure_library(force: bool = False, announce=None, wanted: bool | None = None) -> str:
+    """Make the library ready before this process imports any kernel; return what happened.
+
+    ``"fresh"`` (nothing to do), ``"built"``, ``"off"`` (the environment asks for
+    another mode; ``wanted=True`` builds anyway), or ``"unavailable: <why>"`` (the
+    command then runs numba's just-in-time kernels). ``announce(text)`` is told
+    before a build starts (30-40 s) and why one failed (default: standard error).
+    """
+    if not (library_wanted() if wanted is None else wanted):
+        return "off"
+    if not force and library_is_fresh():
+        return "fresh"
+    say = announce or (lambda text: print(text, file=sys.stderr, flush=True))
+    say("compiling the kernel library (once per version of the sources; 30-40 s)...")
+    command = [sys.executable, "-m", "robot.dynamics.kernel_build", *(["--force"] if force else [])]
+    done = subprocess.run(command, env=dict(os.environ, **{MODE_VARIABLE: "numba"}), capture_output=True, text=True)
+    if done.returncode != 0:
+        lines = (done.stderr or done.stdout).strip().splitlines()
+        why = lines[-1] if lines else f"exit code {done.returncode}"
+        say(f"warning: the kernel library was not built ({why}); running numba's just-in-time kernels instead")
+        return f"unavailable: {why}"
+    return "built"
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Build the library in this process (``--force``: even when it is fresh); print the manifest's path."""
+    from clearance_contact.kernel_library import KernelLibraryError
+
+    argv = sys.argv[1:] if argv is None else argv
+    try:
+        path = build_library(force="--force" in argv)
+    except (KernelLibraryError, OSError) as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return 1
+    print(path)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
