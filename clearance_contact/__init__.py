@@ -6,7 +6,8 @@ installed, ahead of time into the kernel library when it has been built
 (``CLEARANCE_CONTACT_JIT=numba`` uses numba's JIT, ``=0`` disables both); without
 either the same code runs as plain Python.
 
-* :mod:`.compiled`: ``jit``, ``JIT_ENABLED``, ``KERNEL_MODE``, the kernels' ``STATUS_*`` codes;
+* :mod:`.compiled`: the kernels' ``STATUS_*`` codes; ``jit``, ``JIT_ENABLED``, ``KERNEL_MODE`` (from :mod:`.kernel_mode`);
+* :mod:`.kernel_mode`: how the kernels run (the kernel library, numba's JIT, plain Python);
 * :mod:`.kernel_library`: the kernels compiled ahead of time, loaded without numba;
 
 * :mod:`.errors`: ``ContactError``, ``ContactParameterError``;

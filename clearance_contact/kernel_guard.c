@@ -3,9 +3,9 @@
  * A Guard holds, for one kernel, the argument types of each exported version and the
  * export itself, and a fallback. Called, it passes the call to the first export whose
  * types every argument has (numba's typeof would give that exact type) and otherwise
- * to the fallback (numba's just-in-time dispatcher). The checks are the ones of the
- * Python guard that clearance_contact.kernel_library generates (its reference, and
- * what runs when this file cannot be compiled), at ~10 ns an argument instead of ~150.
+ * (other types, another number of arguments, keywords) to the fallback: numba's
+ * just-in-time dispatcher. About 10 ns an argument; checks written in Python cost ~150.
+ * The descriptions are validated once, when the Guard is made (a malformed one raises).
  *
  * Argument descriptions (Python tuples, built by kernel_library.guard_spec):
  *   (KIND_FLOAT64,) (KIND_INT64,) (KIND_BOOL,)
@@ -71,10 +71,51 @@ static int matches(PyObject *value, PyObject *description)
     return 0;
 }
 
+/* 1 if description is well formed (the layout above), else 0 with a ValueError set. */
+static int valid_description(PyObject *description)
+{
+    if (!PyTuple_Check(description) || PyTuple_GET_SIZE(description) < 1 || !PyLong_CheckExact(PyTuple_GET_ITEM(description, 0))) {
+        PyErr_Format(PyExc_ValueError, "an argument description is a tuple starting with an int kind, not %R", description);
+        return 0;
+    }
+    long kind = PyLong_AsLong(PyTuple_GET_ITEM(description, 0));
+    if (kind == -1 && PyErr_Occurred())
+        return 0;
+    Py_ssize_t size = PyTuple_GET_SIZE(description);
+    if (kind == KIND_ARRAY) {
+        for (Py_ssize_t k = 1; k < 5 && k < size; k++) {
+            PyObject *field = PyTuple_GET_ITEM(description, k);
+            if (!PyLong_CheckExact(field) || PyLong_AsLong(field) < 0)
+                size = -1;
+            if (PyErr_Occurred())
+                return 0; /* an int too large for a C long: OverflowError */
+        }
+        if (size != 5) {
+            PyErr_Format(PyExc_ValueError, "an array description is (kind, dtype kind, item size, ndim, flags) ints, not %R", description);
+            return 0;
+        }
+        return 1;
+    }
+    if (kind == KIND_TUPLE) {
+        for (Py_ssize_t k = 1; k < size; k++)
+            if (!valid_description(PyTuple_GET_ITEM(description, k)))
+                return 0;
+        return 1;
+    }
+    if ((kind == KIND_FLOAT64 || kind == KIND_INT64 || kind == KIND_BOOL) && size == 1)
+        return 1;
+    PyErr_Format(PyExc_ValueError, "unknown argument description %R", description);
+    return 0;
+}
+
 static PyObject *guard_vectorcall(PyObject *self, PyObject *const *args, size_t nargsf, PyObject *kwnames)
 {
     Guard *guard = (Guard *)self;
     Py_ssize_t nargs = PyVectorcall_NARGS(nargsf);
+    if (guard->versions == NULL || guard->fallback == NULL) { /* cleared by the collector: never called then */
+        PyErr_SetString(PyExc_RuntimeError, "kernel guard used after it was cleared");
+        return NULL;
+    }
     if (kwnames == NULL || PyTuple_GET_SIZE(kwnames) == 0) {
         Py_ssize_t count = PyTuple_GET_SIZE(guard->versions);
         for (Py_ssize_t v = 0; v < count; v++) {
@@ -97,6 +138,22 @@ static PyObject *guard_new(PyTypeObject *type, PyObject *args, PyObject *kwargs)
     PyObject *versions, *fallback;
     if (!PyArg_ParseTuple(args, "O!O:Guard", &PyTuple_Type, &versions, &fallback))
         return NULL;
+    for (Py_ssize_t v = 0; v < PyTuple_GET_SIZE(versions); v++) {
+        PyObject *version = PyTuple_GET_ITEM(versions, v);
+        if (!PyTuple_Check(version) || PyTuple_GET_SIZE(version) != 2 || !PyTuple_Check(PyTuple_GET_ITEM(version, 0))
+            || !PyCallable_Check(PyTuple_GET_ITEM(version, 1))) {
+            PyErr_Format(PyExc_ValueError, "a version is (descriptions tuple, export callable), not %R", version);
+            return NULL;
+        }
+        PyObject *descriptions = PyTuple_GET_ITEM(version, 0);
+        for (Py_ssize_t k = 0; k < PyTuple_GET_SIZE(descriptions); k++)
+            if (!valid_description(PyTuple_GET_ITEM(descriptions, k)))
+                return NULL;
+    }
+    if (!PyCallable_Check(fallback)) {
+        PyErr_SetString(PyExc_TypeError, "the fallback must be callable");
+        return NULL;
+    }
     Guard *guard = (Guard *)type->tp_alloc(type, 0);
     if (guard == NULL)
         return NULL;
@@ -138,9 +195,20 @@ static PyObject *guard_get_fallback(Guard *guard, void *closure)
     return guard->fallback;
 }
 
+static int guard_set_fallback(Guard *guard, PyObject *value, void *closure)
+{
+    if (value == NULL || !PyCallable_Check(value)) {
+        PyErr_SetString(PyExc_TypeError, "the fallback must be callable");
+        return -1;
+    }
+    Py_INCREF(value);
+    Py_SETREF(guard->fallback, value);
+    return 0;
+}
+
 static PyGetSetDef guard_getset[] = {
     {"__dict__", PyObject_GenericGetDict, PyObject_GenericSetDict, NULL, NULL},
-    {"fallback", (getter)guard_get_fallback, NULL, "what a call no export takes goes to", NULL},
+    {"fallback", (getter)guard_get_fallback, (setter)guard_set_fallback, "what a call no export takes goes to", NULL},
     {NULL},
 };
 
@@ -163,7 +231,7 @@ static PyTypeObject GuardType = {
 static PyObject *check(PyObject *module, PyObject *args)
 {
     PyObject *value, *description;
-    if (!PyArg_ParseTuple(args, "OO!:check", &value, &PyTuple_Type, &description))
+    if (!PyArg_ParseTuple(args, "OO:check", &value, &description) || !valid_description(description))
         return NULL;
     return PyBool_FromLong(matches(value, description));
 }

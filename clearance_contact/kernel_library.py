@@ -21,18 +21,19 @@ export is only ever reached through a *guard*, generated here from the manifest'
 argument descriptions, that checks every argument as numba's dispatcher would
 (class, dtype, dimensions, layout, writeable, aligned; the scalars' types) and hands
 any other call to numba's just-in-time compiler
-(:func:`clearance_contact.compiled.switch_to_numba`): a call is never wrong, at worst
+(:func:`clearance_contact.kernel_mode.switch_to_numba`): a call is never wrong, at worst
 slower.
 
 Freshness: the manifest records a digest of every source file in the folders of the
 kernels' sources (the same files numba's cache is checked against:
-:func:`clearance_contact.compiled.drop_stale_caches`), of the interpreter and of this
+:func:`clearance_contact.kernel_mode.drop_stale_caches`), of the interpreter and of this
 CPU (the library is compiled for the host CPU, like numba's JIT). A library whose
 digest differs is not used; :func:`build` replaces it.
 """
 
 from __future__ import annotations
 
+import contextlib
 import hashlib
 import importlib.machinery
 import importlib.util
@@ -46,7 +47,7 @@ from typing import Any, Callable
 
 import numpy as np
 
-__all__ = ["MANIFEST", "library_folder", "source_files", "digest", "is_fresh", "load", "guard", "build", "KernelLibraryError"]
+__all__ = ["MANIFEST", "library_folder", "source_files", "digest", "is_fresh", "import_extension", "load", "guard", "build", "KernelLibraryError"]
 
 MANIFEST = "manifest.json"
 """The manifest's file name in the library folder (written last: its presence completes a build)."""
@@ -58,8 +59,13 @@ ANCHOR = Path(__file__).resolve().parents[1]
 """Sources are recorded relative to this folder (the one holding ``clearance_contact`` and ``robot``)."""
 
 GUARD_SOURCE = "kernel_guard.c"
-"""The C version of the guards (beside this file), compiled with the library when a C compiler is there."""
-"""Sources are recorded relative to this folder (the one holding ``clearance_contact`` and ``robot``)."""
+"""The guards' C source (beside this file), compiled with the library."""
+
+FAILURE = "build_failed.json"
+"""Written where a build failed (its digest and why): later commands do not try again until the sources change."""
+
+#: numba settings that change the code it generates (its optimisation level, bounds checks, target CPU)
+_NUMBA_SETTINGS = ("NUMBA_OPT", "NUMBA_BOUNDSCHECK", "NUMBA_CPU_NAME", "NUMBA_CPU_FEATURES", "NUMBA_FASTMATH")
 
 
 class KernelLibraryError(RuntimeError):
@@ -67,10 +73,44 @@ class KernelLibraryError(RuntimeError):
 
 
 def library_folder() -> Path:
-    """Where the library lives: ``$CLEARANCE_KERNEL_DIR``, else ``clearance_contact/__pycache__/kernel_library``
-    (beside numba's own cache of the same kernels)."""
+    """Where this environment's library lives: ``$CLEARANCE_KERNEL_DIR`` as given, else a folder named by
+    :func:`environment_key` under ``clearance_contact/__pycache__/kernel_library`` (beside numba's own cache
+    of the same kernels; under ``$XDG_CACHE_HOME``/``~/.cache`` when the package's folder is read-only).
+
+    One folder per environment: virtual environments, interpreters or machines sharing a
+    checkout keep their own libraries instead of rebuilding each other's.
+    """
     configured = os.environ.get("CLEARANCE_KERNEL_DIR")
-    return Path(configured) if configured else Path(__file__).resolve().parent / "__pycache__" / "kernel_library"
+    if configured:
+        return Path(configured)
+    package = Path(__file__).resolve().parent
+    base = package / "__pycache__" / "kernel_library"
+    if not os.access(base if base.is_dir() else package, os.W_OK):
+        base = Path(os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache") / "clearance" / "kernel_library"
+    return base / environment_key()[:16]
+
+
+def _distribution(name: str) -> str:
+    """``name``'s installed version: the name of its ``.dist-info`` folder on ``sys.path``.
+
+    Read off the file system (not importlib.metadata, 15 ms to import, nor the import
+    system, which a process that blocks numba would refuse): "numba: none" if absent.
+    """
+    for entry in sys.path:
+        folder = Path(entry or ".")
+        if folder.is_dir():
+            found = sorted(path.name for path in folder.glob(f"{name}-*.dist-info"))
+            if found:
+                return " ".join(found)
+    return f"{name}: none"
+
+
+def environment_key() -> str:
+    """sha256 of what the compiled code depends on besides the sources: interpreter, numpy, numba and
+    llvmlite, numba's code-generation settings, this CPU (the library is compiled for the host CPU)."""
+    parts = [sys.version, sysconfig.get_config_var("EXT_SUFFIX") or "", np.__version__, _distribution("numba"), _distribution("llvmlite")]
+    parts += [f"{name}={os.environ.get(name, '')}" for name in _NUMBA_SETTINGS] + [_cpu_identity()]
+    return hashlib.sha256("\n".join(parts).encode()).hexdigest()
 
 
 def source_files(kernel_sources) -> list[str]:
@@ -97,36 +137,45 @@ def _cpu_identity() -> str:
 
 
 def digest(sources: list[str]) -> str:
-    """sha256 of the files ``sources`` (relative to :data:`ANCHOR`), the interpreter and this CPU."""
+    """sha256 of the files ``sources`` (relative to :data:`ANCHOR`), the guards' C source and :func:`environment_key`."""
     hasher = hashlib.sha256()
-    for relative in sources:
+    for relative in [*sources, f"clearance_contact/{GUARD_SOURCE}"]:
         hasher.update(relative.encode() + b"\0")
         try:
             hasher.update((ANCHOR / relative).read_bytes())
         except OSError:  # a source went away: the digest cannot match
             hasher.update(b"missing")
-    hasher.update(sys.version.encode() + (sysconfig.get_config_var("EXT_SUFFIX") or "").encode() + np.__version__.encode())
-    hasher.update((Path(__file__).resolve().parent / GUARD_SOURCE).read_bytes())
-    hasher.update(_cpu_identity().encode())
+    hasher.update(environment_key().encode())
     return hasher.hexdigest()
 
 
-def _read_manifest(folder: Path) -> dict | None:
+def _read_record(path: Path) -> dict | None:
+    """A manifest or failure record of this format with its ``digest`` and ``sources``, else None."""
     try:
-        manifest = json.loads((folder / MANIFEST).read_text())
+        record = json.loads(path.read_text())
     except (OSError, ValueError):
         return None
-    if not isinstance(manifest, dict) or manifest.get("format") != FORMAT:
+    if not isinstance(record, dict) or record.get("format") != FORMAT or not isinstance(record.get("sources"), list):
         return None
-    return manifest
+    return record
+
+
+def _fresh_record(path: Path) -> dict | None:
+    """The record at ``path`` if its digest is that of today's sources and environment."""
+    record = _read_record(path)
+    if record is None or record.get("digest") != digest(record["sources"]):
+        return None
+    return record
 
 
 def _fresh_manifest(folder: Path) -> dict | None:
-    """The folder's manifest if its digest is that of today's sources, interpreter and CPU."""
-    manifest = _read_manifest(folder)
-    if manifest is None or manifest.get("digest") != digest(manifest.get("sources", [])):
-        return None
-    return manifest
+    return _fresh_record(folder / MANIFEST)
+
+
+def failed_build(folder: Path | None = None) -> str | None:
+    """Why the last build in ``folder`` failed, if it was tried on today's sources and environment; else None."""
+    record = _fresh_record((library_folder() if folder is None else Path(folder)) / FAILURE)
+    return None if record is None else str(record.get("reason", "unknown"))
 
 
 def is_fresh(folder: Path | None = None) -> bool:
@@ -134,7 +183,8 @@ def is_fresh(folder: Path | None = None) -> bool:
     return _fresh_manifest(library_folder() if folder is None else Path(folder)) is not None
 
 
-def _import_extension(name: str, path: Path):
+def import_extension(name: str, path: Path):
+    """Import the extension module file ``path`` as ``name`` (not entered in ``sys.modules``)."""
     loader = importlib.machinery.ExtensionFileLoader(name, str(path))
     module = importlib.util.module_from_spec(importlib.util.spec_from_file_location(name, path, loader=loader))
     loader.exec_module(module)
@@ -152,13 +202,13 @@ def load(folder: Path | None = None) -> Library | None:
     manifest = _fresh_manifest(folder)
     if manifest is None:
         return None
-    paths = [folder / manifest["filename"], folder / manifest["guard_filename"]]
-    if not all(path.is_file() for path in paths):  # (an extension this process loaded before would still import)
-        return None
     try:
-        kernels = _import_extension(manifest["module"], paths[0])
-        guards = _import_extension("kernel_guard", paths[1])
-    except (ImportError, OSError):
+        paths = [folder / manifest["filename"], folder / manifest["guard_filename"]]
+        if not all(path.is_file() for path in paths):  # (an extension this process loaded before would still import)
+            return None
+        kernels = import_extension(manifest["module"], paths[0])
+        guards = import_extension("kernel_guard", paths[1])
+    except (ImportError, OSError, KeyError, TypeError):
         return None
     return Library(manifest, kernels, guards)
 
@@ -212,9 +262,6 @@ def guard(function: Callable, exports: list[dict], module: Any, fallback: Callab
     :file:`kernel_guard.c`. A call with keywords goes to ``fallback``. The guard keeps
     ``function`` as ``py_func`` (as numba's dispatchers do), and its name and docstring.
     """
-    code = function.__code__
-    if code.co_kwonlyargcount or code.co_flags & 0x0C:  # *args, **kwargs or keyword-only: not exported
-        raise KernelLibraryError(f"{function.__qualname__}: an exported kernel takes positional parameters only")
     versions = tuple((tuple(guard_spec(d) for d in export["arguments"]), getattr(module, export["symbol"])) for export in exports)
     guarded = guards.Guard(versions, fallback)
     guarded.__name__, guarded.__qualname__, guarded.__module__ = function.__name__, function.__qualname__, function.__module__
@@ -257,49 +304,70 @@ def _locked(folder: Path):
 def build(kernels: dict[str, tuple[Callable, tuple[str, ...]]], folder: Path | None = None, force: bool = False) -> Path:
     """Compile ``kernels`` (qualified name -> (numba dispatcher, exported signatures)) into ``folder``.
 
-    Nothing is done when the folder already holds a fresh library (unless ``force``).
-    The library is written under a temporary name and the manifest last, each
-    atomically: a reader sees the old library, no library, or the new one. Returns
-    the manifest's path. Raises :class:`KernelLibraryError` when numba.pycc or the C
-    compiler fails.
+    Every kernel of the process goes in ``kernels``: those with signatures are
+    exported, and all of them name the sources the digest covers (a kernel without
+    exports is compiled into its callers). Nothing is done when the folder already
+    holds a fresh library (unless ``force``). The library is written under a temporary
+    name and the manifest last, each atomically: a reader sees the old library, no
+    library, or the new one. Returns the manifest's path. Raises
+    :class:`KernelLibraryError` when numba.pycc or the C compiler fails, after recording
+    why (:func:`failed_build`).
     """
     import inspect
-    import shutil
-    import tempfile
 
     folder = library_folder() if folder is None else Path(folder)
+    try:
+        sources = source_files(inspect.getsourcefile(dispatcher.py_func) for dispatcher, _ in kernels.values())
+    except ValueError as exc:  # a kernel outside the packages
+        raise KernelLibraryError(f"a kernel's source is outside {ANCHOR}: {exc}") from exc
     folder.mkdir(parents=True, exist_ok=True)
-    sources = source_files(inspect.getsourcefile(dispatcher.py_func) for dispatcher, _ in kernels.values())
     with _locked(folder):
         current = digest(sources)
         manifest = _fresh_manifest(folder)
         if not force and manifest is not None and manifest["digest"] == current and load(folder) is not None:
             return folder / MANIFEST
-        work = Path(tempfile.mkdtemp(dir=folder, prefix="build-"))
         try:
-            module_name = f"clearance_kernels_{current[:16]}"
-            guards = _compile_guards(work / "guards", f"kernel_guard_{current[:16]}")  # seconds; the kernels take 30
-            exports = _compile(kernels, module_name, work)
-            (built,) = work.glob(module_name + "*")
-            for path in (built, guards):
-                os.replace(path, folder / path.name)
-            manifest = {
-                "format": FORMAT, "digest": current, "module": module_name, "filename": built.name,
-                "guard_filename": guards.name, "sources": sources, "exports": exports,
-            }  # fmt: skip
-            partial = folder / f"{MANIFEST}.{os.getpid()}"
-            partial.write_text(json.dumps(manifest, indent=1))
-            os.replace(partial, folder / MANIFEST)
-        finally:
-            shutil.rmtree(work, ignore_errors=True)
+            manifest = _build_into(folder, {name: entry for name, entry in kernels.items() if entry[1]}, current)
+        except KernelLibraryError as exc:
+            _write_json(folder / FAILURE, {"format": FORMAT, "digest": current, "sources": sources, "reason": " ".join(str(exc).split())})
+            raise
+        _write_json(folder / MANIFEST, dict(manifest, sources=sources))
+        (folder / FAILURE).unlink(missing_ok=True)
         for old in [*folder.glob("clearance_kernels_*"), *folder.glob("kernel_guard_*")]:
             if old.name not in (manifest["filename"], manifest["guard_filename"]):
                 old.unlink(missing_ok=True)
     return folder / MANIFEST
 
 
+def _build_into(folder: Path, exported: dict, current: str) -> dict:
+    """Compile the guards and the exports in a scratch folder, move both into ``folder``; the manifest (no sources)."""
+    import shutil
+    import tempfile
+
+    work = Path(tempfile.mkdtemp(dir=folder, prefix="build-"))
+    try:
+        module_name = f"clearance_kernels_{current[:16]}"
+        guards = _compile_guards(work / "guards", f"kernel_guard_{current[:16]}")  # seconds; the kernels take 15-40
+        exports = _compile(exported, module_name, work)
+        (built,) = work.glob(module_name + "*")
+        for path in (built, guards):
+            os.replace(path, folder / path.name)
+    finally:
+        shutil.rmtree(work, ignore_errors=True)
+    return {"format": FORMAT, "digest": current, "module": module_name, "filename": built.name, "guard_filename": guards.name, "exports": exports}
+
+
+def _write_json(path: Path, record: dict) -> None:
+    """Write ``record`` to ``path`` atomically (a temporary file, then a rename)."""
+    partial = path.with_name(f"{path.name}.{os.getpid()}")
+    partial.write_text(json.dumps(record, indent=1))
+    os.replace(partial, path)
+
+
 def _compile(kernels: dict, module_name: str, output: Path) -> dict:
     """numba.pycc: one extension module with every signature of every kernel; the manifest's ``exports``."""
+    import inspect
+
     try:
         from numba.core import sigutils
         from numba.pycc import CC
@@ -309,16 +377,40 @@ def _compile(kernels: dict, module_name: str, output: Path) -> dict:
     compiler.output_dir, compiler.target_cpu, compiler.verbose = str(output), "host", False
     exports: dict[str, list[dict]] = {}
     for number, (qualified, (dispatcher, signatures)) in enumerate(sorted(kernels.items())):
+        code = dispatcher.py_func.__code__
+        if code.co_kwonlyargcount or code.co_flags & (inspect.CO_VARARGS | inspect.CO_VARKEYWORDS):
+            raise KernelLibraryError(f"{qualified}: an exported kernel takes positional parameters only")
         for k, signature in enumerate(signatures):
             arguments, _ = sigutils.normalize_signature(signature)
             symbol = f"k{number}_{k}_{dispatcher.py_func.__name__}"
             compiler.export(symbol, signature)(dispatcher.py_func)
             exports.setdefault(qualified, []).append({"symbol": symbol, "signature": signature, "arguments": [describe(a) for a in arguments]})
     try:
-        compiler.compile()
+        with _host_cpu_features():
+            compiler.compile()
     except Exception as exc:  # numba's typing errors, LLVM's, the C compiler's (distutils): all mean "no library"
         raise KernelLibraryError(f"compiling the kernel library failed: {type(exc).__name__}: {exc}") from exc
     return exports
+
+
+@contextlib.contextmanager
+def _host_cpu_features():
+    """Compile for the features this CPU reports, as numba's JIT does.
+
+    numba.pycc's "host" target names the CPU model only and lets LLVM assume every
+    feature of that model; a virtual machine that hides some (AVX-512 on a server
+    model, say) would then run instructions it lacks. numba's JIT passes the features
+    LLVM detects (or ``NUMBA_CPU_FEATURES``): the same here, so the library's code is
+    the JIT's.
+    """
+    from numba.core.codegen import AOTCPUCodegen
+
+    original = AOTCPUCodegen._customize_tm_features
+    AOTCPUCodegen._customize_tm_features = lambda codegen: codegen._get_host_cpu_features()
+    try:
+        yield
+    finally:
+        AOTCPUCodegen._customize_tm_features = original
 
 
 def _compile_guards(output: Path, stem: str) -> Path:

@@ -2,16 +2,26 @@
 
 from __future__ import annotations
 
+import atexit
 import os
+import shutil
 import subprocess
 import sys
+import tempfile
 import warnings
 from pathlib import Path
 
 import pytest
 
-from robot.dynamics import equations as D
-from robot.errors import RedundantConstraintWarning
+if "CLEARANCE_KERNEL_DIR" not in os.environ:
+    # the session's own kernel library folder (set before any kernel is imported): the tests never
+    # write into the checkout's, the commands they start build it there once (kernel_library_dir),
+    # and this process, which imports the kernels below before any library exists there, runs numba's JIT
+    os.environ["CLEARANCE_KERNEL_DIR"] = tempfile.mkdtemp(prefix="clearance-kernel-library-")
+    atexit.register(shutil.rmtree, os.environ["CLEARANCE_KERNEL_DIR"], True)
+
+from robot.dynamics import equations as D  # noqa: E402 (after the kernel library's folder is set)
+from robot.errors import RedundantConstraintWarning  # noqa: E402
 
 DATA = Path(__file__).resolve().parent / "data"
 
@@ -159,3 +169,20 @@ def calibrated_scene_file(folder: Path, name: str, extra: str = "") -> Path:
     path = folder / f"{name}_calibrated.toml"
     path.write_text(f'extends = "{name}"\nname = "{name}_calibrated"\n{extra}\n{_CALIBRATED_CLEARANCES}', encoding="utf-8")
     return path
+
+
+@pytest.fixture(scope="session")
+def kernel_library_dir() -> Path:
+    """The session's kernel library (``CLEARANCE_KERNEL_DIR``), built by ``python -m robot.dynamics.kernel_build``
+    if no command built it yet (15-40 s, once a session). Processes the tests start use it by default."""
+    from clearance_contact.kernel_library import MANIFEST
+
+    folder = Path(os.environ["CLEARANCE_KERNEL_DIR"])
+    environment = dict(os.environ, CLEARANCE_CONTACT_JIT="numba")
+    done = subprocess.run(
+        [sys.executable, "-m", "robot.dynamics.kernel_build"], cwd=Path(__file__).resolve().parents[1], env=environment,
+        capture_output=True, text=True, timeout=900,
+    )  # fmt: skip
+    assert done.returncode == 0, done.stderr[-3000:]
+    assert Path(done.stdout.strip()) == folder / MANIFEST
+    return folder

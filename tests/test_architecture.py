@@ -114,6 +114,7 @@ for method in ("RK4", "GenAlpha", "Newmark"):
     options = dataclasses.replace(run.scene.solver, method=method, first_step=5e-6)
     assert integrate(run.dynamics, run.y0, run.t_span, options, run.scene.limits).success, method
 print("scipy modules:", *sorted(m for m in sys.modules if m == "scipy" or m.startswith("scipy.")))
+print("numba imported:", "numba" in sys.modules)
 """
 
 
@@ -121,21 +122,23 @@ print("scipy modules:", *sorted(m for m in sys.modules if m == "scipy" or m.star
 _HEAVY_SCIPY = ("scipy.integrate", "scipy.optimize", "scipy.sparse", "scipy.special", "scipy.interpolate", "scipy.stats", "scipy.spatial")
 
 
-@pytest.mark.parametrize("compiled", ["0", "1"], ids=["python kernels", "compiled kernels"])
-def test_a_cvode_or_fixed_step_run_imports_no_heavy_scipy(tmp_path, compiled):
+@pytest.mark.parametrize("kernels", ["0", "numba", "library"], ids=["python kernels", "numba kernels", "kernel library"])
+def test_a_cvode_or_fixed_step_run_imports_no_heavy_scipy(tmp_path, kernels, request):
     """scipy's integrators, root finders and sparse matrices cost 0.3-0.8 s to import (issue 16):
     CVODE and the fixed-step methods need none of them.
 
-    ``scipy.linalg`` stays: the structured Jacobian's Cholesky solve
-    (``cho_factor``/``cho_solve``: replacing it changes the Jacobian at rounding level,
-    which moves a run's later force peaks by up to 3e-4 at rtol 1e-6), and numba
-    imports it anyway when it loads its first kernel. Both with the kernels in plain
-    Python (``CLEARANCE_CONTACT_JIT=0``) and compiled (numba's own imports included;
-    the kernels come from numba's cache once another test has compiled them).
+    Nor ``scipy.linalg`` (0.13-0.25 s, most of it numpy submodules its initialisation
+    pulls in): the structured Jacobian's Cholesky solve and the redundancy check's
+    pivoted QR call scipy's LAPACK module alone (``robot.model.lapack``, same bits).
+    Only numba still imports it, at its start: with the kernels in plain Python
+    (``CLEARANCE_CONTACT_JIT=0``) and from the kernel library, neither numba nor
+    ``scipy.linalg`` is imported.
     """
     import os
 
-    environment = dict(os.environ, CLEARANCE_CONTACT_JIT=compiled)
+    environment = dict(os.environ, CLEARANCE_CONTACT_JIT="1" if kernels == "library" else kernels)
+    if kernels == "library":
+        environment["CLEARANCE_KERNEL_DIR"] = str(request.getfixturevalue("kernel_library_dir"))
     done = subprocess.run(
         [sys.executable, "-c", _RUN_WITHOUT_SCIPY, str(tmp_path)], cwd=ROOT, env=environment, capture_output=True, text=True, timeout=600
     )
@@ -143,6 +146,10 @@ def test_a_cvode_or_fixed_step_run_imports_no_heavy_scipy(tmp_path, compiled):
     (report,) = [line for line in done.stdout.splitlines() if line.startswith("scipy modules:")]
     loaded = [name for name in report.split()[2:] if name.startswith(_HEAVY_SCIPY)]
     assert loaded == [], f"scipy modules imported by a CVODE / fixed-step run: {loaded}"
+    numba_imported = "numba imported: True" in done.stdout
+    assert numba_imported == (kernels == "numba")
+    if kernels != "numba":
+        assert "scipy.linalg" not in report.split()[2:], report
 
 
 def test_scipy_methods_are_imported_on_first_use():

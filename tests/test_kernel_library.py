@@ -17,6 +17,7 @@
 
 from __future__ import annotations
 
+import enum
 import json
 import os
 import shutil
@@ -38,16 +39,10 @@ def _env(folder: Path, mode: str = "1") -> dict:
     return dict(os.environ, CLEARANCE_KERNEL_DIR=str(folder), CLEARANCE_CONTACT_JIT=mode, PYTHONPATH=str(ROOT))
 
 
-@pytest.fixture(scope="module")
-def library_dir(tmp_path_factory) -> Path:
-    """A library built by ``python -m robot.dynamics.kernel_build`` into a temporary folder (30-40 s)."""
-    folder = tmp_path_factory.mktemp("kernel_library")
-    done = subprocess.run(
-        [sys.executable, "-m", "robot.dynamics.kernel_build"], cwd=ROOT, env=_env(folder, "numba"), capture_output=True, text=True, timeout=900
-    )
-    assert done.returncode == 0, done.stderr[-3000:]
-    assert Path(done.stdout.strip()) == folder / kernel_library.MANIFEST
-    return folder
+@pytest.fixture(name="library_dir", scope="module")
+def library_dir_fixture(kernel_library_dir) -> Path:
+    """The library conftest builds once per session into a temporary folder (the real build)."""
+    return kernel_library_dir
 
 
 @pytest.fixture(scope="module")
@@ -58,6 +53,7 @@ def library(library_dir):
 
 
 def test_the_built_library_is_fresh_and_complete(library_dir, library):
+    assert (library_dir / kernel_library.MANIFEST).is_file()
     """Every kernel that declares exports is in the manifest with each of its signatures, and loads."""
     from clearance_contact import compiled
     from robot.dynamics import kernel_build
@@ -120,12 +116,18 @@ def _scalars() -> list[tuple[str, object]]:
         ("float", 1.5), ("np.float64", np.float64(1.5)), ("np.float32", np.float32(1.5)), ("int", 3),
         ("int out of int64", 2**70), ("np.int64", np.int64(3)), ("np.int32", np.int32(3)), ("True", True),
         ("np.bool_", np.bool_(True)), ("None", None), ("str", "x"), ("list", [1.0, 2.0]),
+        ("np.longlong", np.longlong(3)), ("IntEnum", _Small.ONE),
     ]  # fmt: skip
 
 
+class _Small(enum.IntEnum):
+    ONE = 1
+
+
 #: what the guards refuse though numba takes it (the call then goes to numba: slower, never wrong):
-#: ndarray subclasses, and unaligned data (numba types it as aligned; the library is not asked to)
-_STRICTER = {"matrix subclass", "f8 unaligned"}
+#: ndarray subclasses, unaligned data (numba types it as aligned; the library is not asked to), and
+#: np.longlong scalars (int64 to numba, a type of its own to numpy's C API)
+_STRICTER = {"matrix subclass", "f8 unaligned", "np.longlong"}
 
 
 def _numba_takes(value, numba_type) -> bool:
@@ -187,6 +189,34 @@ def test_a_tuple_argument_is_checked_item_by_item(library):
     assert not library.guards.check(good[:3], spec)
     assert not library.guards.check((good[0], np.asfortranarray(np.zeros((2, 3))), good[2], good[3]), spec)
     assert not library.guards.check(list(good), spec)
+
+
+def test_the_guard_type_sends_other_calls_to_its_fallback(library):
+    """Keywords, another number of arguments, other types: the fallback; the fallback can be replaced
+    (switch_to_numba does); malformed descriptions are refused when the guard is made."""
+    calls = []
+    spec = kernel_library.guard_spec({"kind": "array", "dtype": "float64", "ndim": 1, "layout": "C", "mutable": True})
+    guard = library.guards.Guard(
+        (((spec, (0,)), lambda *a: calls.append(("export", len(a))) or "export"),), lambda *a, **k: calls.append(("fallback", len(a), tuple(k))) or "fallback"
+    )  # fmt: skip
+    vector = np.zeros(3)
+    assert guard(vector, 1.0) == "export"
+    assert guard(vector, x=1.0) == "fallback" and guard(vector) == "fallback" and guard(vector, 1.0, 2.0) == "fallback"
+    assert guard(vector[::2], 1.0) == "fallback" and guard(vector, 1) == "fallback"
+    assert calls == [("export", 2), ("fallback", 1, ("x",)), ("fallback", 1, ()), ("fallback", 3, ()), ("fallback", 2, ()), ("fallback", 2, ())]
+    guard.fallback = lambda *a: "replaced"
+    assert guard(vector) == "replaced"
+    with pytest.raises(TypeError):
+        guard.fallback = 3
+    for malformed in [(), ("3",), (3, 102, 8), (3, 102, 8, 1, -1), (9,), (0, 1), (4, (3,)), (3, 102, 8, 1, 2**80)]:
+        with pytest.raises((ValueError, OverflowError)):
+            library.guards.Guard((((malformed,), len),), len)
+        with pytest.raises((ValueError, OverflowError)):
+            library.guards.check(1.0, malformed)
+    with pytest.raises(ValueError):
+        library.guards.Guard((("not a version",),), len)
+    with pytest.raises(TypeError):
+        library.guards.Guard((), "not callable")
 
 
 _FALLBACK_SCRIPT = """
@@ -369,7 +399,24 @@ def test_ensure_library_respects_the_environment_and_reports_a_failed_build(libr
     monkeypatch.setenv("CLEARANCE_KERNEL_DIR", str(blocker / "library"))  # cannot be made: the build fails fast
     outcome = ensure_library()
     assert outcome.startswith("unavailable: ")
-    assert "running numba's just-in-time kernels instead" in capsys.readouterr().err
+    assert "runs use numba's just-in-time kernels until it is" in capsys.readouterr().err
+
+
+def test_a_failed_build_is_recorded_and_not_tried_at_every_command(tmp_path, monkeypatch, capsys):
+    """No working C compiler: the build fails once, says why, and later commands do not try again
+    until the sources change; ``retry_failed`` (clearance build-kernels) does."""
+    from robot.dynamics.kernel_build import ensure_library
+
+    monkeypatch.setenv("CLEARANCE_KERNEL_DIR", str(tmp_path))
+    monkeypatch.setenv("CLEARANCE_CONTACT_JIT", "1")
+    monkeypatch.setenv("CC", "/bin/false")  # distutils' compiler: the guards' compilation fails at once
+    first = ensure_library()
+    assert first.startswith("unavailable: ") and "kernel_guard.c" in first, first
+    assert kernel_library.failed_build(tmp_path) is not None
+    assert "was not built" in capsys.readouterr().err
+    again = ensure_library()
+    assert again.startswith("unavailable: ") and "failed to build" in capsys.readouterr().err  # from the record
+    assert ensure_library(retry_failed=True).startswith("unavailable: ") and "was not built" in capsys.readouterr().err
 
 
 def test_the_build_kernels_command(library_dir, tmp_path):

@@ -34,7 +34,8 @@ from pathlib import Path
 import numpy as np
 
 from clearance_contact import STEEL, BrownMcPheeFriction, SphericalClearanceJoint
-from clearance_contact.compiled import JIT_ENABLED, KERNEL_MODE
+from clearance_contact import compiled
+from clearance_contact.compiled import JIT_ENABLED
 from robot.cli.common import EXIT_OK, UsageError, positive_int, writable_file
 from robot.io.atomic import atomic_write_text
 
@@ -190,7 +191,7 @@ def execute(args: argparse.Namespace) -> int:
         "unit": "microseconds per call",
         "statistic": "median over repeats",
         "jit": JIT_ENABLED,
-        "kernels": KERNEL_MODE,
+        "kernels": compiled.KERNEL_MODE,  # at the end: a call the library does not take switches to numba
         "python": sys.version.split()[0],
         "numpy": np.__version__,
         "numba": numba_version,

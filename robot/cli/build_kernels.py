@@ -44,7 +44,7 @@ def execute(args: argparse.Namespace) -> int:
             print(f"{len(exports)} kernels, {sum(len(v) for v in exports.values())} exported signatures")
         return EXIT_OK if fresh else EXIT_RUN_FAILED
     start = time.perf_counter()
-    outcome = ensure_library(force=args.force, wanted=True)
+    outcome = ensure_library(force=args.force, wanted=True, retry_failed=True)
     if outcome.startswith("unavailable"):
         return EXIT_RUN_FAILED
     print(f"kernel library in {folder}: {outcome}" + (f" in {time.perf_counter() - start:.0f} s" if outcome == "built" else ""))

@@ -72,9 +72,15 @@ def main(argv: list[str] | None = None) -> int:
     argv = sys.argv[1:] if argv is None else list(argv)
     command = _command_of(argv)
     if command in KERNEL_COMMANDS and not {"-h", "--help"} & set(argv):
+        # before the command's module imports a kernel (some do at import: so before parsing, too),
+        # so that its process loads the library, not numba; once per version of the sources
         from robot.dynamics.kernel_build import ensure_library
 
-        ensure_library()  # before the command imports a kernel: its process then loads the library, not numba
+        try:
+            ensure_library()
+        except KeyboardInterrupt:
+            print("interrupted", file=sys.stderr)
+            return EXIT_INTERRUPTED
     parser = build_parser(command)
     try:
         args = parser.parse_args(argv)

@@ -60,30 +60,40 @@ def build_library(force: bool = False) -> Path:
         )
     for name in KERNEL_MODULES:
         importlib.import_module(name)
-    kernels = {name: (kernel.dispatcher, kernel.exports) for name, kernel in compiled.KERNELS.items() if kernel.exports}
+    kernels = {name: (kernel.dispatcher, kernel.exports) for name, kernel in compiled.KERNELS.items()}
     return kernel_library.build(kernels, force=force)
 
 
-def ensure_library(force: bool = False, announce=None, wanted: bool | None = None) -> str:
+def ensure_library(force: bool = False, announce=None, wanted: bool | None = None, retry_failed: bool = False) -> str:
     """Make the library ready before this process imports any kernel; return what happened.
 
     ``"fresh"`` (nothing to do), ``"built"``, ``"off"`` (the environment asks for
     another mode; ``wanted=True`` builds anyway), or ``"unavailable: <why>"`` (the
-    command then runs numba's just-in-time kernels). ``announce(text)`` is told
-    before a build starts (30-40 s) and why one failed (default: standard error).
+    command then runs numba's just-in-time kernels). A build that failed on the same
+    sources and environment is not tried again (``force`` or ``retry_failed`` do). ``announce(text)`` is
+    told before a build starts (15-40 s) and why one failed (default: standard error).
     """
     if not (library_wanted() if wanted is None else wanted):
         return "off"
     if not force and library_is_fresh():
         return "fresh"
+    from clearance_contact.kernel_library import failed_build
+
     say = announce or (lambda text: print(text, file=sys.stderr, flush=True))
-    say("compiling the kernel library (once per version of the sources; 30-40 s)...")
+    earlier = None if force or retry_failed else failed_build()
+    if earlier is not None:  # tried on these very sources: not again at every command (clearance build-kernels --force does)
+        say(f"note: numba's just-in-time kernels (the kernel library failed to build: {earlier[:300]})")
+        return f"unavailable: {earlier}"
+    say("compiling the kernel library (once per version of the sources; 15-40 s)...")
     command = [sys.executable, "-m", "robot.dynamics.kernel_build", *(["--force"] if force else [])]
-    done = subprocess.run(command, env=dict(os.environ, **{MODE_VARIABLE: "numba"}), capture_output=True, text=True)
+    try:
+        done = subprocess.run(command, env=dict(os.environ, **{MODE_VARIABLE: "numba"}), capture_output=True, text=True)
+    except OSError as exc:  # the interpreter cannot be started again (a frozen or sandboxed process)
+        done = subprocess.CompletedProcess(command, 1, "", str(exc))
     if done.returncode != 0:
         lines = (done.stderr or done.stdout).strip().splitlines()
         why = lines[-1] if lines else f"exit code {done.returncode}"
-        say(f"warning: the kernel library was not built ({why}); running numba's just-in-time kernels instead")
+        say(f"warning: the kernel library was not built ({why}); runs use numba's just-in-time kernels until it is")
         return f"unavailable: {why}"
     return "built"
 
@@ -96,7 +106,7 @@ def main(argv: list[str] | None = None) -> int:
     try:
         path = build_library(force="--force" in argv)
     except (KernelLibraryError, OSError) as exc:
-        print(f"error: {exc}", file=sys.stderr)
+        print("error: " + " ".join(str(exc).split()), file=sys.stderr)  # one line: ensure_library reports the last
         return 1
     print(path)
     return 0

@@ -71,6 +71,7 @@ from clearance_contact import ContactError
 from robot.dynamics import equations as D
 from robot.dynamics import jacobian_kernels as JK
 from robot.dynamics import rhs_kernels as K
+from robot.model.lapack import cholesky_factor, cholesky_solve
 
 
 
@@ -133,11 +134,9 @@ class StateJacobian:
         dtau_c_dxi, dtau_c_dv = self.contact_stiffness(t, onset_rates)
         drnea_dq, drnea_dv, _ = pin.computeRNEADerivatives(model, data, q, v, qdd)
         # M^-1 [Phi_q^T, F_xi, F_v] with one Cholesky factorisation (crba filled M's upper triangle)
-        from scipy.linalg import cho_factor, cho_solve  # on first use: ~0.1 s of imports a run without Jacobians never pays
-
-        factor = cho_factor(data.M, lower=False, check_finite=False)
+        factor = cholesky_factor(data.M)
         m = phi_q.shape[0]
-        solved = cho_solve(factor, np.hstack([phi_q.T, dtau_c_dxi - drnea_dq, dtau_c_dv - drnea_dv]), check_finite=False)
+        solved = cholesky_solve(factor, np.hstack([phi_q.T, dtau_c_dxi - drnea_dq, dtau_c_dv - drnea_dv]))
         mass_inverse_phi_t = solved[:, :m]
         # S^-1 Phi_q [M^-1 F_xi, M^-1 F_v, I]: then P F = M^-1 F - M^-1 Phi_q^T S^-1 Phi_q M^-1 F,
         # X Phi_q = M^-1 Phi_q^T S^-1 Phi_q and X^T F = S^-1 Phi_q M^-1 F

@@ -222,9 +222,7 @@ class DirectCVODE:
         key = vector if isinstance(vector, int) else ctypes.cast(vector, _pointer).value
         array = self._arrays.get(key)
         if array is None:
-            # .view(np.float64): numpy's own float64 type object, not ctypes' equivalent one, which
-            # the kernel library's guards would check by value at every call (clearance_contact.kernel_library)
-            array = np.ctypeslib.as_array(self._lib.N_VGetArrayPointer(key), shape=(self.size,)).view(np.float64)
+            array = np.ctypeslib.as_array(self._lib.N_VGetArrayPointer(key), shape=(self.size,))
             self._arrays[key] = array
         return array
 
