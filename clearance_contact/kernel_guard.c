@@ -130,7 +130,12 @@ static PyObject *guard_vectorcall(PyObject *self, PyObject *const *args, size_t 
                 return PyObject_Vectorcall(PyTuple_GET_ITEM(version, 1), args, nargsf, NULL);
         }
     }
-    return PyObject_Vectorcall(guard->fallback, args, nargsf, kwnames);
+    /* a strong reference for the call: switch_to_numba replaces the fallback while the old one runs */
+    PyObject *fallback = guard->fallback;
+    Py_INCREF(fallback);
+    PyObject *result = PyObject_Vectorcall(fallback, args, nargsf, kwnames);
+    Py_DECREF(fallback);
+    return result;
 }
 
 static PyObject *guard_new(PyTypeObject *type, PyObject *args, PyObject *kwargs)

@@ -36,9 +36,17 @@ from __future__ import annotations
 import hashlib
 import os
 import sys
+import warnings
 from pathlib import Path
 
-__all__ = ["jit", "JIT_ENABLED", "KERNEL_MODE", "SWITCHED_BY", "KERNELS", "Kernel", "switch_to_numba", "watch_numba_cache", "drop_stale_caches"]
+__all__ = [
+    "jit", "JIT_ENABLED", "KERNEL_MODE", "SWITCHED_BY", "KERNELS", "Kernel", "KernelSwitchWarning", "switch_to_numba",
+    "watch_numba_cache", "drop_stale_caches",
+]  # fmt: skip
+
+
+class KernelSwitchWarning(RuntimeWarning):
+    """A call the kernel library has no compiled version of switched the process to numba's JIT (slower, same results)."""
 
 
 class Kernel:
@@ -135,6 +143,12 @@ def switch_to_numba(reason: str = "asked") -> None:
     if KERNEL_MODE != "library":
         return
     SWITCHED_BY = reason
+    warnings.warn(
+        f"kernel library: no compiled version of {reason}; this process now runs numba's just-in-time kernels "
+        "(the same results, ~0.5 s and ~130 MiB more; the kernel's `exports` can declare these types)",
+        KernelSwitchWarning,
+        stacklevel=3,
+    )
     compile_ = _start_numba()
     replacements = {}
     for kernel in KERNELS.values():

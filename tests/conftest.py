@@ -173,11 +173,12 @@ def calibrated_scene_file(folder: Path, name: str, extra: str = "") -> Path:
 
 @pytest.fixture(scope="session")
 def kernel_library_dir() -> Path:
-    """The session's kernel library (``CLEARANCE_KERNEL_DIR``), built by ``python -m robot.dynamics.kernel_build``
-    if no command built it yet (15-40 s, once a session). Processes the tests start use it by default."""
-    from clearance_contact.kernel_library import MANIFEST
+    """The session's kernel library folder (``library_folder()`` under this session's ``CLEARANCE_KERNEL_DIR``), built by
+    ``python -m robot.dynamics.kernel_build`` if no command built it yet (15-40 s, once a session). Processes the
+    tests start find it by default; pass its parent as ``CLEARANCE_KERNEL_DIR`` to one that was given another."""
+    from clearance_contact.kernel_library import MANIFEST, library_folder
 
-    folder = Path(os.environ["CLEARANCE_KERNEL_DIR"])
+    folder = library_folder()
     environment = dict(os.environ, CLEARANCE_CONTACT_JIT="numba")
     done = subprocess.run(
         [sys.executable, "-m", "robot.dynamics.kernel_build"], cwd=Path(__file__).resolve().parents[1], env=environment,

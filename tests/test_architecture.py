@@ -138,7 +138,7 @@ def test_a_cvode_or_fixed_step_run_imports_no_heavy_scipy(tmp_path, kernels, req
 
     environment = dict(os.environ, CLEARANCE_CONTACT_JIT="1" if kernels == "library" else kernels)
     if kernels == "library":
-        environment["CLEARANCE_KERNEL_DIR"] = str(request.getfixturevalue("kernel_library_dir"))
+        environment["CLEARANCE_KERNEL_DIR"] = str(request.getfixturevalue("kernel_library_dir").parent)
     done = subprocess.run(
         [sys.executable, "-c", _RUN_WITHOUT_SCIPY, str(tmp_path)], cwd=ROOT, env=environment, capture_output=True, text=True, timeout=600
     )

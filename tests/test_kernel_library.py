@@ -35,8 +35,9 @@ from tests.conftest import closure_scene
 ROOT = Path(__file__).resolve().parents[1]
 
 
-def _env(folder: Path, mode: str = "1") -> dict:
-    return dict(os.environ, CLEARANCE_KERNEL_DIR=str(folder), CLEARANCE_CONTACT_JIT=mode, PYTHONPATH=str(ROOT))
+def _env(library: Path, mode: str = "1") -> dict:
+    """A process's environment that finds ``library`` (a folder of :func:`kernel_library.library_folder`'s kind)."""
+    return dict(os.environ, CLEARANCE_KERNEL_DIR=str(library.parent), CLEARANCE_CONTACT_JIT=mode, PYTHONPATH=str(ROOT))
 
 
 @pytest.fixture(name="library_dir", scope="module")
@@ -53,8 +54,8 @@ def library(library_dir):
 
 
 def test_the_built_library_is_fresh_and_complete(library_dir, library):
-    assert (library_dir / kernel_library.MANIFEST).is_file()
     """Every kernel that declares exports is in the manifest with each of its signatures, and loads."""
+    assert (library_dir / kernel_library.MANIFEST).is_file()
     from clearance_contact import compiled
     from robot.dynamics import kernel_build
     import importlib
@@ -220,15 +221,18 @@ def test_the_guard_type_sends_other_calls_to_its_fallback(library):
 
 
 _FALLBACK_SCRIPT = """
-import sys, json, numpy as np
+import sys, json, warnings, numpy as np
 from clearance_contact import compiled
 from robot.integration import events
 before = (compiled.KERNEL_MODE, "numba" in sys.modules, hasattr(events.all_finite, "py_func"), events.all_finite.__name__)
 contiguous = events.all_finite(np.array([1.0, 2.0]))
-strided = events.all_finite(np.array([1.0, np.nan, 2.0, np.nan])[::2])  # [1, 2]: finite
+with warnings.catch_warnings(record=True) as caught:
+    warnings.simplefilter("always")
+    strided = events.all_finite(np.array([1.0, np.nan, 2.0, np.nan])[::2])  # [1, 2]: finite
 single = events.all_finite(np.array([1.0, np.inf], dtype=np.float32))
 print(json.dumps({"before": before, "results": [contiguous, strided, single], "after": compiled.KERNEL_MODE,
-                  "switched_by": compiled.SWITCHED_BY, "numba": "numba" in sys.modules}))
+                  "switched_by": compiled.SWITCHED_BY, "numba": "numba" in sys.modules,
+                  "warned": [(type(w.message).__name__, w.filename) for w in caught]}))
 """
 
 
@@ -242,6 +246,7 @@ def test_a_call_the_library_cannot_take_gets_numbas_result(library_dir):
     assert report["results"] == [True, True, False]
     assert report["after"] == "numba" and report["numba"]
     assert report["switched_by"].startswith("robot.integration.events.all_finite(float64[1d, A]")
+    assert report["warned"] == [["KernelSwitchWarning", "<string>"]]  # once, pointing at the caller
 
 
 _WITHOUT_NUMBA_SCRIPT = """
@@ -366,7 +371,7 @@ def test_another_digest_or_a_missing_extension_means_no_library(library_dir, tmp
     assert not kernel_library.is_fresh(copy) and kernel_library.load(copy) is None
     (copy / kernel_library.MANIFEST).write_text(json.dumps(manifest))
     (copy / manifest["filename"]).unlink()
-    assert kernel_library.is_fresh(copy) and kernel_library.load(copy) is None  # fresh digest, nothing to load
+    assert not kernel_library.is_fresh(copy) and kernel_library.load(copy) is None  # a fresh digest, nothing to load
     (copy / kernel_library.MANIFEST).write_text("{not json")
     assert kernel_library.load(copy) is None
 
@@ -388,7 +393,7 @@ def test_the_digest_follows_every_source_of_the_kernels_folders(tmp_path, monkey
 def test_ensure_library_respects_the_environment_and_reports_a_failed_build(library_dir, tmp_path, monkeypatch, capsys):
     from robot.dynamics.kernel_build import ensure_library
 
-    monkeypatch.setenv("CLEARANCE_KERNEL_DIR", str(library_dir))
+    monkeypatch.setenv("CLEARANCE_KERNEL_DIR", str(library_dir.parent))
     for mode in ("0", "numba"):
         monkeypatch.setenv("CLEARANCE_CONTACT_JIT", mode)
         assert ensure_library() == "off"
@@ -396,7 +401,7 @@ def test_ensure_library_respects_the_environment_and_reports_a_failed_build(libr
     assert ensure_library() == "fresh"
     blocker = tmp_path / "a file"
     blocker.write_text("")
-    monkeypatch.setenv("CLEARANCE_KERNEL_DIR", str(blocker / "library"))  # cannot be made: the build fails fast
+    monkeypatch.setenv("CLEARANCE_KERNEL_DIR", str(blocker))  # its folder cannot be made: the build fails fast
     outcome = ensure_library()
     assert outcome.startswith("unavailable: ")
     assert "runs use numba's just-in-time kernels until it is" in capsys.readouterr().err
@@ -404,19 +409,33 @@ def test_ensure_library_respects_the_environment_and_reports_a_failed_build(libr
 
 def test_a_failed_build_is_recorded_and_not_tried_at_every_command(tmp_path, monkeypatch, capsys):
     """No working C compiler: the build fails once, says why, and later commands do not try again
-    until the sources change; ``retry_failed`` (clearance build-kernels) does."""
+    until the sources or the compilers change; ``retry_failed`` (clearance build-kernels) does."""
     from robot.dynamics.kernel_build import ensure_library
 
     monkeypatch.setenv("CLEARANCE_KERNEL_DIR", str(tmp_path))
     monkeypatch.setenv("CLEARANCE_CONTACT_JIT", "1")
-    monkeypatch.setenv("CC", "/bin/false")  # distutils' compiler: the guards' compilation fails at once
+    monkeypatch.setenv("CC", "/bin/false")  # distutils' compiler: numba's compiler check fails at once
     first = ensure_library()
-    assert first.startswith("unavailable: ") and "kernel_guard.c" in first, first
-    assert kernel_library.failed_build(tmp_path) is not None
+    assert first.startswith("unavailable: ") and "C and C++ compilers" in first, first
+    assert kernel_library.failed_build() is not None
     assert "was not built" in capsys.readouterr().err
     again = ensure_library()
-    assert again.startswith("unavailable: ") and "failed to build" in capsys.readouterr().err  # from the record
+    assert again.startswith("unavailable: ") and "build-kernels` tries again" in capsys.readouterr().err  # from the record
     assert ensure_library(retry_failed=True).startswith("unavailable: ") and "was not built" in capsys.readouterr().err
+    monkeypatch.setenv("CC", "/bin/true")  # other compilers: the record no longer applies
+    assert kernel_library.failed_build() is None
+
+
+def test_a_read_only_package_folder_sends_builds_to_the_user_cache(tmp_path, monkeypatch):
+    """Reads look in the package's folder first (a library built at installation), then the user's cache;
+    a build writes to the first that can be written."""
+    monkeypatch.delenv("CLEARANCE_KERNEL_DIR", raising=False)
+    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path))
+    package, cache = kernel_library.library_folders()
+    assert package.parent.parent.name == "__pycache__" and cache.is_relative_to(tmp_path)
+    assert package.name == cache.name == kernel_library.environment_key()[:16]
+    monkeypatch.setattr(kernel_library.os, "access", lambda path, mode: not Path(path).is_relative_to(package.parents[2]))
+    assert kernel_library.library_folder() == cache
 
 
 def test_the_build_kernels_command(library_dir, tmp_path):
@@ -425,7 +444,7 @@ def test_the_build_kernels_command(library_dir, tmp_path):
     )
     assert status.returncode == 0 and "fresh" in status.stdout and "exported signatures" in status.stdout, status.stdout + status.stderr
     empty = subprocess.run(
-        [sys.executable, "-m", "robot.cli.main", "build-kernels", "--status"], cwd=ROOT, env=_env(tmp_path), capture_output=True, text=True, timeout=300
+        [sys.executable, "-m", "robot.cli.main", "build-kernels", "--status"], cwd=ROOT, env=dict(_env(library_dir), CLEARANCE_KERNEL_DIR=str(tmp_path)), capture_output=True, text=True, timeout=300
     )
     assert empty.returncode == 1 and "missing or stale" in empty.stdout
     fresh = subprocess.run(

@@ -26,6 +26,7 @@ import json
 import sys
 from pathlib import Path
 
+from robot.analysis.studies.run_phases import KERNEL_MODES
 from robot.cli.common import EXIT_OK, UsageError, positive_int, writable_file
 
 DEFAULT_OUT = Path("results") / "bench_run.json"
@@ -38,7 +39,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--compare", type=Path, default=None, help="an earlier report of this command: add a before/after table")
     parser.add_argument(
         "--kernels",
-        choices=("library", "numba"),
+        choices=KERNEL_MODES,
         default="library",
         help="the kernel library (default, what a run uses) or numba's just-in-time kernels (CLEARANCE_CONTACT_JIT=numba)",
     )

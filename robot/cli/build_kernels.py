@@ -7,10 +7,12 @@ examples:
 
 Commands that run kernels (run, paper, sweep, ...) build it themselves when it is
 missing or stale, so this is needed only to build it ahead of time (an image, a
-cluster's shared environment) or to see its state. It takes 30-40 s (numba.pycc and a C
-compiler) and goes to clearance_contact/__pycache__/kernel_library, or to
-$CLEARANCE_KERNEL_DIR. Runs then import no numba: ~0.4 s and ~110 MiB less per
-process, the same results bit for bit (docs/performance.md, "Kernel library").
+cluster's shared environment) or to see its state. It takes 15-40 s (numba.pycc, a C and a
+C++ compiler, the Python headers) and goes to a folder of this environment (Python,
+numpy, numba, CPU) under clearance_contact/__pycache__/kernel_library, else under
+~/.cache/clearance/kernel_library, or under $CLEARANCE_KERNEL_DIR. Runs then import
+no numba: ~0.5 s and ~130 MiB less per process, the same results bit for bit
+(docs/performance.md, "Fourth pass").
 CLEARANCE_CONTACT_JIT=numba runs numba's just-in-time kernels instead;
 CLEARANCE_CONTACT_JIT=0 plain Python. Exit 1 if the build fails (the reason is
 printed; runs then use numba's just-in-time kernels).
@@ -19,7 +21,6 @@ printed; runs then use numba's just-in-time kernels).
 from __future__ import annotations
 
 import argparse
-import json
 import time
 
 from robot.cli.common import EXIT_OK, EXIT_RUN_FAILED
@@ -31,21 +32,26 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def execute(args: argparse.Namespace) -> int:
-    from clearance_contact.kernel_library import MANIFEST, is_fresh, library_folder
+    from clearance_contact.kernel_library import failed_build, fresh_library, library_folder
     from robot.dynamics.kernel_build import ensure_library, library_wanted
 
-    folder = library_folder()
     if args.status:
-        fresh = is_fresh()
-        print(f"kernel library in {folder}: {'fresh' if fresh else 'missing or stale'}"
-              + ("" if library_wanted() else " (not used: CLEARANCE_CONTACT_JIT asks for another mode)"))
-        if fresh:
-            exports = json.loads((folder / MANIFEST).read_text())["exports"]
-            print(f"{len(exports)} kernels, {sum(len(v) for v in exports.values())} exported signatures")
-        return EXIT_OK if fresh else EXIT_RUN_FAILED
+        found = fresh_library()
+        note = "" if library_wanted() else " (not used: CLEARANCE_CONTACT_JIT asks for another mode)"
+        if found is None:
+            failure = failed_build()
+            print(f"kernel library: missing or stale in {library_folder()}{note}" + (f"; the last build failed: {failure}" if failure else ""))
+            return EXIT_RUN_FAILED
+        folder, manifest = found
+        exports = manifest["exports"]
+        print(f"kernel library in {folder}: fresh{note}")
+        print(f"{len(exports)} kernels, {sum(len(entries) for entries in exports.values())} exported signatures")
+        return EXIT_OK
     start = time.perf_counter()
     outcome = ensure_library(force=args.force, wanted=True, retry_failed=True)
     if outcome.startswith("unavailable"):
         return EXIT_RUN_FAILED
-    print(f"kernel library in {folder}: {outcome}" + (f" in {time.perf_counter() - start:.0f} s" if outcome == "built" else ""))
+    found = fresh_library()
+    where = found[0] if found is not None else library_folder()
+    print(f"kernel library in {where}: {outcome}" + (f" in {time.perf_counter() - start:.0f} s" if outcome == "built" else ""))
     return EXIT_OK

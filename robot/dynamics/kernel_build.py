@@ -51,7 +51,7 @@ def library_is_fresh() -> bool:
 
 def build_library(force: bool = False) -> Path:
     """Compile the library (this process must run numba: ``CLEARANCE_CONTACT_JIT=numba``); the manifest's path."""
-    from clearance_contact import compiled, kernel_library
+    from clearance_contact import compiled, kernel_compiler, kernel_library
 
     if compiled.KERNEL_MODE != "numba":
         raise kernel_library.KernelLibraryError(
@@ -61,7 +61,7 @@ def build_library(force: bool = False) -> Path:
     for name in KERNEL_MODULES:
         importlib.import_module(name)
     kernels = {name: (kernel.dispatcher, kernel.exports) for name, kernel in compiled.KERNELS.items()}
-    return kernel_library.build(kernels, force=force)
+    return kernel_compiler.build(kernels, force=force)
 
 
 def ensure_library(force: bool = False, announce=None, wanted: bool | None = None, retry_failed: bool = False) -> str:
@@ -77,25 +77,32 @@ def ensure_library(force: bool = False, announce=None, wanted: bool | None = Non
         return "off"
     if not force and library_is_fresh():
         return "fresh"
-    from clearance_contact.kernel_library import failed_build
+    from clearance_contact.kernel_library import ANCHOR, failed_build
 
     say = announce or (lambda text: print(text, file=sys.stderr, flush=True))
     earlier = None if force or retry_failed else failed_build()
-    if earlier is not None:  # tried on these very sources: not again at every command (clearance build-kernels --force does)
-        say(f"note: numba's just-in-time kernels (the kernel library failed to build: {earlier[:300]})")
+    if earlier is not None:  # tried on these sources with these compilers: not again at every command
+        say(f"note: numba's just-in-time kernels: the kernel library failed to build ({earlier[:300]}); "
+            "`clearance build-kernels` tries again")  # fmt: skip
         return f"unavailable: {earlier}"
     say("compiling the kernel library (once per version of the sources; 15-40 s)...")
     command = [sys.executable, "-m", "robot.dynamics.kernel_build", *(["--force"] if force else [])]
+    # the child builds this process's packages (a script may have put a checkout first on sys.path)
+    environment = dict(os.environ, **{MODE_VARIABLE: "numba"})
+    environment["PYTHONPATH"] = os.pathsep.join(filter(None, [str(ANCHOR), environment.get("PYTHONPATH", "")]))
     try:
-        done = subprocess.run(command, env=dict(os.environ, **{MODE_VARIABLE: "numba"}), capture_output=True, text=True)
+        done = subprocess.run(command, env=environment, capture_output=True, text=True)
     except OSError as exc:  # the interpreter cannot be started again (a frozen or sandboxed process)
         done = subprocess.CompletedProcess(command, 1, "", str(exc))
     if done.returncode != 0:
         lines = (done.stderr or done.stdout).strip().splitlines()
         why = lines[-1] if lines else f"exit code {done.returncode}"
-        say(f"warning: the kernel library was not built ({why}); runs use numba's just-in-time kernels until it is")
-        return f"unavailable: {why}"
-    return "built"
+    elif not library_is_fresh():
+        why = f"the build wrote {done.stdout.strip()}, which this process does not find fresh"
+    else:
+        return "built"
+    say(f"warning: the kernel library was not built ({why}); runs use numba's just-in-time kernels until it is")
+    return f"unavailable: {why}"
 
 
 def main(argv: list[str] | None = None) -> int:

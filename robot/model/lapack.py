@@ -40,7 +40,7 @@ def _flapack():
     """scipy's f2py LAPACK module: the one already imported, else loaded from its file, else through scipy.linalg."""
     if _FLAPACK in sys.modules:
         return sys.modules[_FLAPACK]
-    from clearance_contact.kernel_library import import_extension
+    from clearance_contact.extension import import_extension
 
     spec = importlib.util.find_spec("scipy")
     folders = list(spec.submodule_search_locations or []) if spec is not None else []
