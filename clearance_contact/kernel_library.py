@@ -50,7 +50,7 @@ import numpy as np
 from clearance_contact.extension import import_extension
 
 __all__ = [
-    "MANIFEST", "FAILURE", "KernelLibraryError", "Library", "library_folder", "library_folders", "environment_key", "toolchain",
+    "MANIFEST", "FAILURE", "MODE_VARIABLE", "requested_mode", "KernelLibraryError", "Library", "library_folder", "library_folders", "environment_key", "toolchain",
     "source_files", "digest", "read_record", "fresh_record", "failed_build", "fresh_library", "is_fresh", "load", "guard", "guard_spec",
 ]  # fmt: skip
 
@@ -68,6 +68,16 @@ GUARD_SOURCE = "kernel_guard.c"
 
 FAILURE = "build_failed.json"
 """Written where a build failed (its digest and why): later commands do not try again until the sources change."""
+
+MODE_VARIABLE = "CLEARANCE_CONTACT_JIT"
+"""The environment variable that chooses how kernels run: ``0`` plain Python, ``numba`` numba's JIT, else the library."""
+
+
+def requested_mode() -> str:
+    """What :data:`MODE_VARIABLE` asks for: ``"python"``, ``"numba"``, or ``"library"`` (the default; numba's JIT
+    where no fresh library is found)."""
+    return {"0": "python", "numba": "numba"}.get(os.environ.get(MODE_VARIABLE, "1"), "library")
+
 
 #: numba settings that change the code it generates (its optimisation level, bounds checks, target CPU)
 _NUMBA_SETTINGS = ("NUMBA_OPT", "NUMBA_BOUNDSCHECK", "NUMBA_CPU_NAME", "NUMBA_CPU_FEATURES", "NUMBA_FASTMATH")

@@ -231,12 +231,12 @@ def drop_stale_caches(sources, cache_directory) -> bool:
 def _choose_mode() -> None:
     """Set :data:`KERNEL_MODE` from ``CLEARANCE_CONTACT_JIT``, the library's freshness and numba's presence."""
     global KERNEL_MODE, JIT_ENABLED, _LIBRARY
-    setting = os.environ.get("CLEARANCE_CONTACT_JIT", "1")
-    if setting == "0":
-        return
-    if setting != "numba":
-        from clearance_contact import kernel_library
+    from clearance_contact import kernel_library
 
+    requested = kernel_library.requested_mode()
+    if requested == "python":
+        return
+    if requested == "library":
         _LIBRARY = kernel_library.load()
     if _LIBRARY is not None:
         KERNEL_MODE = "library"

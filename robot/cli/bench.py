@@ -35,7 +35,6 @@ import numpy as np
 
 from clearance_contact import STEEL, BrownMcPheeFriction, SphericalClearanceJoint
 from clearance_contact import compiled
-from clearance_contact.compiled import JIT_ENABLED
 from robot.cli.common import EXIT_OK, UsageError, positive_int, writable_file
 from robot.io.atomic import atomic_write_text
 
@@ -173,7 +172,7 @@ def execute(args: argparse.Namespace) -> int:
     if args.repeats < 7:
         raise UsageError(f"--repeats={args.repeats} must be >= 7")
     writable_file(args.out, "--out")
-    if not JIT_ENABLED:  # the numbers would be plain Python's, 20-40 x the compiled ones: say so first
+    if not compiled.JIT_ENABLED:  # the numbers would be plain Python's, 20-40 x the compiled ones: say so first
         print(
             "warning: the contact kernels are NOT compiled (numba missing or CLEARANCE_CONTACT_JIT=0): these are "
             "plain-Python times; install numba (pip install numba) for the compiled ones",
@@ -190,7 +189,7 @@ def execute(args: argparse.Namespace) -> int:
     report = {
         "unit": "microseconds per call",
         "statistic": "median over repeats",
-        "jit": JIT_ENABLED,
+        "jit": compiled.JIT_ENABLED,
         "kernels": compiled.KERNEL_MODE,  # at the end: a call the library does not take switches to numba
         "python": sys.version.split()[0],
         "numpy": np.__version__,

@@ -32,12 +32,12 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def execute(args: argparse.Namespace) -> int:
-    from clearance_contact.kernel_library import failed_build, fresh_library, library_folder
-    from robot.dynamics.kernel_build import ensure_library, library_wanted
+    from clearance_contact.kernel_library import failed_build, fresh_library, library_folder, requested_mode
+    from robot.dynamics.kernel_build import ensure_library
 
     if args.status:
         found = fresh_library()
-        note = "" if library_wanted() else " (not used: CLEARANCE_CONTACT_JIT asks for another mode)"
+        note = "" if requested_mode() == "library" else " (not used: CLEARANCE_CONTACT_JIT asks for another mode)"
         if found is None:
             failure = failed_build()
             print(f"kernel library: missing or stale in {library_folder()}{note}" + (f"; the last build failed: {failure}" if failure else ""))

@@ -33,22 +33,6 @@ KERNEL_MODULES: tuple[str, ...] = (
     "robot.integration.events",
 )
 
-#: the environment variable of :mod:`clearance_contact.compiled`; "0" or "numba" leave the library alone
-MODE_VARIABLE = "CLEARANCE_CONTACT_JIT"
-
-
-def library_wanted() -> bool:
-    """False when the environment asks for plain Python (``0``) or numba's JIT (``numba``)."""
-    return os.environ.get(MODE_VARIABLE, "1") not in ("0", "numba")
-
-
-def library_is_fresh() -> bool:
-    """A library built from today's sources is in :func:`clearance_contact.kernel_library.library_folder`."""
-    from clearance_contact.kernel_library import is_fresh
-
-    return is_fresh()
-
-
 def build_library(force: bool = False) -> Path:
     """Compile the library (this process must run numba: ``CLEARANCE_CONTACT_JIT=numba``); the manifest's path."""
     from clearance_contact import compiled, kernel_compiler, kernel_library
@@ -56,7 +40,7 @@ def build_library(force: bool = False) -> Path:
     if compiled.KERNEL_MODE != "numba":
         raise kernel_library.KernelLibraryError(
             f"building the kernel library needs numba's kernels in this process (kernel mode is {compiled.KERNEL_MODE!r}); "
-            f"run it with {MODE_VARIABLE}=numba, as `clearance build-kernels` does"
+            f"run it with {kernel_library.MODE_VARIABLE}=numba, as `clearance build-kernels` does"
         )
     for name in KERNEL_MODULES:
         importlib.import_module(name)
@@ -73,11 +57,12 @@ def ensure_library(force: bool = False, announce=None, wanted: bool | None = Non
     sources and environment is not tried again (``force`` or ``retry_failed`` do). ``announce(text)`` is
     told before a build starts (15-40 s) and why one failed (default: standard error).
     """
-    if not (library_wanted() if wanted is None else wanted):
+    from clearance_contact.kernel_library import ANCHOR, MODE_VARIABLE, failed_build, is_fresh, requested_mode
+
+    if not (requested_mode() == "library" if wanted is None else wanted):
         return "off"
-    if not force and library_is_fresh():
+    if not force and is_fresh():
         return "fresh"
-    from clearance_contact.kernel_library import ANCHOR, failed_build
 
     say = announce or (lambda text: print(text, file=sys.stderr, flush=True))
     earlier = None if force or retry_failed else failed_build()
@@ -97,7 +82,7 @@ def ensure_library(force: bool = False, announce=None, wanted: bool | None = Non
     if done.returncode != 0:
         lines = (done.stderr or done.stdout).strip().splitlines()
         why = lines[-1] if lines else f"exit code {done.returncode}"
-    elif not library_is_fresh():
+    elif not is_fresh():
         why = f"the build wrote {done.stdout.strip()}, which this process does not find fresh"
     else:
         return "built"

@@ -241,7 +241,9 @@ KERNEL_MODES = ("library", "numba")
 def _child_env(kernels: str = "library") -> dict:
     root = Path(__file__).resolve().parents[3]
     env = dict(os.environ)
-    env["CLEARANCE_CONTACT_JIT"] = "numba" if kernels == "numba" else "1"
+    from clearance_contact.kernel_library import MODE_VARIABLE
+
+    env[MODE_VARIABLE] = "numba" if kernels == "numba" else "1"
     env["PYTHONPATH"] = os.pathsep.join([str(root), env.get("PYTHONPATH", "")]).rstrip(os.pathsep)
     return env
 
