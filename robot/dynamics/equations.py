@@ -271,8 +271,9 @@ class CompiledTerms:
         # does everything (``law.kernel`` is None e.g. for a user-defined friction law); others: ``evaluate``
         compiled_law = [getattr(law, "KERNEL_ID", None) in K.LAW_IDS.values() and law.kernel is not None for law in laws]
         self.laws_compiled = all(compiled_law)
-        # every site is evaluated inside the compiled calls (rhs_kernels.all_sites): every law a shipped compiled law
-        self.sites_fused = bool(laws) and self.laws_compiled and all(law.kernel in K.LAW_IDS for law in laws)
+        # every site is evaluated inside the compiled calls (rhs_kernels.all_sites): every law a shipped compiled
+        # law (also when there is none: the fused calls then evaluate no site, and the probe is one call)
+        self.sites_fused = self.laws_compiled and all(law.kernel in K.LAW_IDS for law in laws)
         parameters = [np.asarray(law.kernel_parameters, dtype=float) if ok else np.zeros(0) for law, ok in zip(laws, compiled_law)]
         # each site's [start, end) in the packed law parameters and outputs (empty for a law evaluated through its API)
         parameter_ranges = _consecutive_ranges([p.shape[0] for p in parameters])

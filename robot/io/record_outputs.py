@@ -65,7 +65,7 @@ def allocate(dynamics: D.DynamicsModel, n: int) -> tuple[dict[str, np.ndarray], 
 def compiled_applies(dynamics: D.DynamicsModel, workspace: D.DynamicsWorkspace) -> bool:
     """Whether :func:`compiled_outputs` can evaluate this model (its right-hand side is compiled, laws fused)."""
     compiled = workspace.compiled
-    return compiled is not None and (compiled.sites_fused or not dynamics.contacts)
+    return compiled is not None and compiled.sites_fused
 
 
 def _end_effector_writer(
