@@ -84,7 +84,7 @@ class OdeSolver:
         self.fun = counted
         self.fun_single = fun_single  # not counted (finite-difference Jacobians, as in scipy)
         self.fun_vectorized = fun_vectorized
-        self.direction = np.sign(t_bound - t0) if t_bound != t0 else 1
+        self.direction = float(np.sign(t_bound - t0)) if t_bound != t0 else 1.0  # a Python float: read at every step
         self.n = self.y.size
         self.status = "running"
         self.nfev = 0
@@ -94,7 +94,7 @@ class OdeSolver:
     @property
     def step_size(self) -> float | None:
         """Size of the last accepted step (None before the first)."""
-        return None if self.t_old is None else np.abs(self.t - self.t_old)
+        return None if self.t_old is None else abs(self.t - self.t_old)
 
     def step(self) -> str | None:
         """One accepted step; returns the failure's message (``status == "failed"``) or None."""

@@ -315,6 +315,11 @@ class _CVODEDense(DenseOutput):
         self.t_end = t
         self.y_end = solver.y.copy()
 
+    def __call__(self, t):
+        if type(t) is float:  # the step loop's calls (output times, event and peak location): one time, fewer layers
+            return self._one(t)
+        return super().__call__(t)
+
     def _one(self, t):
         if t == self.t_end:
             return self.y_end.copy()
