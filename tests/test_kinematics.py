@@ -289,21 +289,37 @@ def test_platform_angular_acceleration_matches_finite_differences(ideal):
 
 
 def test_cross_product_is_numpys_bit_for_bit_for_vectors_and_stacks():
-    """The drive's cross product (Python floats for two 3-vectors, numpy for stacks) gives ``np.cross``'s bits,
-    is antisymmetric and orthogonal to both factors, over magnitudes from 1e-6 to 1e6 and broadcast stacks."""
+    """The drive's cross product (Python floats for two 3-vectors, numpy for stacks) gives ``np.cross``'s bits and
+    dtype, is antisymmetric, over magnitudes from 1e-6 to 1e6, lists, and broadcast stacks."""
+
+    def same_bits(left, right):
+        expected = np.cross(left, right)
+        found = cross(left, right)
+        return found.dtype == expected.dtype and found.shape == expected.shape and np.array_equal(found.view(np.uint64), expected.view(np.uint64))
+
     rng = np.random.default_rng(7)
     for _ in range(2000):
         a, b = (rng.normal(size=3) * 10.0 ** rng.uniform(-6, 6) for _ in range(2))
-        c = cross(a, b)
-        assert np.array_equal(c, np.cross(a, b))
-        assert np.array_equal(cross(b, a), -c)
-        scale = np.linalg.norm(a) * np.linalg.norm(b)
-        assert abs(c @ a) <= 1e-12 * scale * np.linalg.norm(a) and abs(c @ b) <= 1e-12 * scale * np.linalg.norm(b)
-    stack = rng.normal(size=(4, 3))
-    vector = rng.normal(size=3)
-    for left, right in ((vector, stack), (stack, vector), (stack, stack[::-1]), ([1.0, 0.0, 0.0], [0.0, 1.0, 0.0])):
-        assert np.array_equal(cross(left, right), np.cross(left, right))
+        assert same_bits(a, b)
+        assert np.array_equal(cross(b, a), -cross(a, b))
+    stack, vector = rng.normal(size=(4, 3)), rng.normal(size=3)
+    for left, right in ((vector, stack), (stack, vector), (stack, stack[::-1]), (vector, vector[None, :]), (vector[None, :], vector)):
+        assert same_bits(left, right)
+    assert same_bits([1.0, 0.0, 0.0], [0.0, 1.0, 0.0])
+    assert cross([1, 2, 3], [4, 5, 6]).dtype == np.float64  # integers are taken as floats
     assert np.array_equal(cross([1.0, 0.0, 0.0], [0.0, 1.0, 0.0]), [0.0, 0.0, 1.0])
+
+
+def test_platform_layout_constants_are_read_only(ideal):
+    """The layout's drive constants are made once from its limbs: neither they nor the limbs' points can change."""
+    _, layout = ideal
+    np.testing.assert_array_equal(layout.platform_points, [limb.platform_point for limb in layout.limbs])
+    np.testing.assert_array_equal(layout.base_points, [limb.base_point for limb in layout.limbs])
+    axis = layout.limbs[layout.plane_limb].revolute_axis
+    np.testing.assert_allclose(layout.plane_normal, axis / np.linalg.norm(axis), rtol=0, atol=1e-16)
+    for array in (layout.platform_points, layout.base_points, layout.plane_normal, layout.limbs[0].base_point, layout.limbs[0].platform_point):
+        with pytest.raises(ValueError):
+            array[0] = 1.0
 
 
 # --------------------------------------------------------------------------- actuation

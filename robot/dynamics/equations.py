@@ -408,7 +408,7 @@ def _probe_gather(dynamics: DynamicsModel, table: np.ndarray) -> np.ndarray:
 class DriveTable:
     """A drive's ``(s, sd, sdd)(t)`` through piecewise polynomials, verified against the drive.
 
-    The exact drive of a platform trajectory (inverse kinematics, ~200 us a call)
+    The exact drive of a platform trajectory (inverse kinematics, ~70 us a call)
     costs more than the rest of the right-hand side, so the integrator reads it
     from a table: on each segment of width ``width`` (built on first use) every
     output is interpolated at ``degree + 1`` Chebyshev nodes, and the polynomial
@@ -567,7 +567,7 @@ def evaluate(
     integrator's right-hand side uses :func:`state_derivative` instead. The drive
     is read from the same verified table as in the right-hand side
     (:class:`DriveTable`, exact to 1e-12 relative; the exact inverse kinematics
-    cost ~200 us a call, more than the rest of this function).
+    cost ~70 us a call).
     """
     model, data = dynamics.mechanism.model, workspace.data
     kernel = workspace.kernel

@@ -110,10 +110,8 @@ class LagrangeSystem:
     def probe(self, t: float, y: np.ndarray, onset: np.ndarray, residual: bool = True) -> D.Probe:
         """Penetration, its rate and the normal force per candidate, and the constraint residual, at (t, y)."""
         nq = self.nq
-        y = np.asarray(y, dtype=float)
-        # Pinocchio's normalize directly (D.normalise_quaternions): ~20,000 probes a run
-        q = pin.normalize(self.mechanism.model, y[:nq])
-        return D.contact_probe(self.dynamics, self.probe_workspace, t, q, y[nq : nq + self.nv], onset, residual)
+        q = D.normalise_quaternions(self.mechanism, y[:nq])
+        return D.contact_probe(self.dynamics, self.probe_workspace, t, q, np.asarray(y[nq : nq + self.nv]), onset, residual=residual)
 
     def penetrations(self, t: float, y: np.ndarray) -> np.ndarray:
         """Penetration per candidate only (positions: cheaper), for the onset root-finding."""
@@ -121,7 +119,7 @@ class LagrangeSystem:
 
     def normalise(self, y: np.ndarray) -> np.ndarray:
         y = np.array(y, dtype=float)
-        y[: self.nq] = pin.normalize(self.mechanism.model, y[: self.nq])  # D.normalise_quaternions on a float copy
+        y[: self.nq] = D.normalise_quaternions(self.mechanism, y[: self.nq])
         return y
 
 

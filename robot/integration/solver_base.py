@@ -84,7 +84,7 @@ class OdeSolver:
         self.fun = counted
         self.fun_single = fun_single  # not counted (finite-difference Jacobians, as in scipy)
         self.fun_vectorized = fun_vectorized
-        self.direction = float(np.sign(t_bound - t0)) if t_bound != t0 else 1.0  # a Python float: read at every step
+        self.direction = np.sign(t_bound - t0) if t_bound != t0 else 1
         self.n = self.y.size
         self.status = "running"
         self.nfev = 0

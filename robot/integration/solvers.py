@@ -316,7 +316,7 @@ class _CVODEDense(DenseOutput):
         self.y_end = solver.y.copy()
 
     def __call__(self, t):
-        if type(t) is float:  # the step loop's calls (output times, event and peak location): one time, fewer layers
+        if isinstance(t, float):  # the step loop's calls (output times, event and peak location): one time, fewer layers
             return self._one(t)
         return super().__call__(t)
 
