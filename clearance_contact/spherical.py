@@ -177,6 +177,9 @@ def spherical_wrenches(parameters, out):
 @jit(exports=(
         "i8(f8[::1], f8[::1, :], f8[::1], f8[::1], f8[:, ::1], f8[::1], f8[::1], f8[::1], f8[::1])",
         "i8(f8[::1], f8[::1, :], f8[::1], f8[::1], f8[::1, :], f8[::1], f8[::1], f8[::1], f8[::1])",
+        # rotations as numpy makes them (C order): the public evaluate() and the Newton-Euler engine
+        "i8(f8[::1], f8[:, ::1], f8[::1], f8[::1], f8[:, ::1], f8[::1], f8[::1], f8[::1], f8[::1])",
+        "i8(f8[::1], f8[:, ::1], f8[::1], f8[::1], f8[::1, :], f8[::1], f8[::1], f8[::1], f8[::1])",
     ))
 def spherical_kernel(
     parameters, outer_rotation, outer_position, outer_twist, inner_rotation, inner_position, inner_twist, onset_rates, out

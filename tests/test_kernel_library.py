@@ -249,6 +249,47 @@ def test_a_call_the_library_cannot_take_gets_numbas_result(library_dir):
     assert report["warned"] == [["KernelSwitchWarning", "<string>"]]  # once, pointing at the caller
 
 
+_PUBLIC_EVALUATE_SCRIPT = """
+import sys, json, warnings, numpy as np
+import clearance_contact as cc
+from clearance_contact import compiled
+from clearance_contact.kernel_mode import KernelSwitchWarning
+warnings.simplefilter("error", KernelSwitchWarning)
+laws = [
+    cc.SphericalClearanceJoint(0.015, 0.0151, cc.STEEL, cc.STEEL, friction=cc.CoulombFriction(0.1, 1e-3)),
+    cc.RevoluteClearanceJoint(0.01, 0.0101, 0.016, 0.0204, 0.02, cc.STEEL, cc.STEEL),
+    cc.TranslationalClearanceJoint(0.05, 0.02, 0.01, 0.0202, 0.0102, cc.STEEL, cc.STEEL, corner_radius=1.5e-3),
+]
+tilt = np.array([[1.0, 0.0, 0.0], [0.0, np.cos(0.002), -np.sin(0.002)], [0.0, np.sin(0.002), np.cos(0.002)]])
+orders = {"C": np.ascontiguousarray, "F": np.asfortranarray}
+outputs = []
+for law in laws:
+    for outer in "CF":
+        for inner in "CF":
+            state = (orders[outer](np.eye(3)), np.zeros(3), np.array([0.0, 0.0, 0.0, 0.0, 0.0, 0.1]),
+                     orders[inner](tilt), np.array([1.2e-4, 0.0, 0.0]), np.array([0.1, -0.2, 0.0, 0.0, 0.0, 0.0]))
+            result = law.evaluate(*state, np.full(law.N_CANDIDATES, 0.1))
+            outputs.append(np.concatenate([result.normal_force.ravel(), result.wrench_outer, result.wrench_inner]).tolist())
+print(json.dumps({"mode": compiled.KERNEL_MODE, "switched_by": compiled.SWITCHED_BY, "numba": "numba" in sys.modules, "outputs": outputs}))
+"""
+
+
+def test_the_public_evaluate_stays_on_the_library_with_numpys_rotations(library_dir):
+    """Rotations as numpy makes them (C order) or as Pinocchio hands them over (Fortran order), in every
+    combination, for the three shipped laws: the library takes every call (no switch to numba, no numba
+    imported), with numba's JIT's results bit for bit; some calls are in contact (a non-zero force)."""
+    reports = {}
+    for mode in ("1", "numba"):
+        done = subprocess.run([sys.executable, "-c", _PUBLIC_EVALUATE_SCRIPT], cwd=ROOT, env=_env(library_dir, mode), capture_output=True, text=True, timeout=600)
+        assert done.returncode == 0, done.stderr[-3000:]
+        reports[mode] = json.loads(done.stdout.strip().splitlines()[-1])
+    library, jit = reports["1"], reports["numba"]
+    assert (library["mode"], library["switched_by"], library["numba"]) == ("library", None, False)
+    assert jit["mode"] == "numba"
+    assert library["outputs"] == jit["outputs"]
+    assert any(value != 0.0 for row in library["outputs"] for value in row)
+
+
 _WITHOUT_NUMBA_SCRIPT = """
 import sys, json, numpy as np
 from clearance_contact import compiled
