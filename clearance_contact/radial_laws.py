@@ -100,7 +100,7 @@ def johnson_line_load(delta: float, pi_modulus: float, four_clearance: float) ->
     return p_scale * math.exp(u)
 
 
-@jit
+@jit(exports=("f8(f8[::1], i8, f8)",))  # RadialLaw.line_density's call (clearance contact-laws)
 def encoded_line_density(parameters, offset: int, delta: float) -> float:
     """q(delta) in N/m of the law encoded at ``parameters[offset:offset + 1 + RADIAL_LAW_PARAMETERS]``; 0 if delta <= 0."""
     if delta <= 0.0:

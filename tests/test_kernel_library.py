@@ -270,14 +270,19 @@ for law in laws:
                      orders[inner](tilt), np.array([1.2e-4, 0.0, 0.0]), np.array([0.1, -0.2, 0.0, 0.0, 0.0, 0.0]))
             result = law.evaluate(*state, np.full(law.N_CANDIDATES, 0.1))
             outputs.append(np.concatenate([result.normal_force.ravel(), result.wrench_outer, result.wrench_inner]).tolist())
+from clearance_contact.radial_laws import RADIAL_LAWS, radial_law
+for name in RADIAL_LAWS:  # the radial laws' line loads, as clearance contact-laws tabulates them
+    law = radial_law(name, 0.01, 0.0101, 0.02, cc.STEEL, cc.STEEL)
+    outputs.append([law.line_density(delta) for delta in (0.0, 1e-6, 1e-5, 1e-4)])
 print(json.dumps({"mode": compiled.KERNEL_MODE, "switched_by": compiled.SWITCHED_BY, "numba": "numba" in sys.modules, "outputs": outputs}))
 """
 
 
 def test_the_public_evaluate_stays_on_the_library_with_numpys_rotations(library_dir):
     """Rotations as numpy makes them (C order) or as Pinocchio hands them over (Fortran order), in every
-    combination, for the three shipped laws: the library takes every call (no switch to numba, no numba
-    imported), with numba's JIT's results bit for bit; some calls are in contact (a non-zero force)."""
+    combination, for the three shipped laws, and every radial law's line load (``clearance contact-laws``):
+    the library takes every call (no switch to numba, no numba imported), with numba's JIT's results bit for
+    bit; some calls are in contact (a non-zero force)."""
     reports = {}
     for mode in ("1", "numba"):
         done = subprocess.run([sys.executable, "-c", _PUBLIC_EVALUATE_SCRIPT], cwd=ROOT, env=_env(library_dir, mode), capture_output=True, text=True, timeout=600)
