@@ -109,13 +109,16 @@ _FLOAT64 = np.dtype(np.float64)
 def state_array(name: str, value, shape: tuple) -> np.ndarray:
     """``value`` as a float64 array of ``shape`` for the compiled kernels, else ValueError.
 
-    A float64 ndarray of the right shape is passed through as is (C or Fortran order,
-    or strided: numba compiles one specialisation per layout); anything else is
-    converted with ``np.asarray``.
+    A float64 ndarray of the right shape, C or Fortran contiguous and writeable, is
+    passed through as is (the layouts the kernel library's exports take, Pinocchio's
+    views among them); anything else (strided or read-only arrays, lists) is copied
+    into a new C-ordered array, so a call never needs another compiled specialisation.
     """
     if type(value) is np.ndarray and value.dtype is _FLOAT64 and value.shape == shape:
-        return value
-    a = np.asarray(value, dtype=np.float64)
+        flags = value.flags
+        if (flags.c_contiguous or flags.f_contiguous) and flags.writeable and flags.aligned:
+            return value
+    a = np.array(value, dtype=np.float64, order="C")
     if a.shape != shape:
         raise ValueError(f"{name} must have shape {shape}, got {a.shape}")
     return a

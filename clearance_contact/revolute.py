@@ -557,6 +557,7 @@ def revolute_wrenches(outer_position, inner_position, out):
         "i8(f8[::1], f8[:, ::1], f8[::1], f8[:, ::1], f8[::1], f8[::1])",
         "i8(f8[::1], f8[::1, :], f8[::1], f8[:, ::1], f8[::1], f8[::1])",
         "i8(f8[::1], f8[::1, :], f8[::1], f8[::1, :], f8[::1], f8[::1])",
+        "i8(f8[::1], f8[:, ::1], f8[::1], f8[::1, :], f8[::1], f8[::1])",
     ))
 def revolute_penetration_kernel(parameters, outer_rotation, outer_position, inner_rotation, inner_position, out):
     """``out[0:4]`` = deepest penetration (m) of [top_radial, top_axial, bottom_radial, bottom_axial].

@@ -294,6 +294,7 @@ def spherical_kernel(
         "i8(f8[::1], f8[:, ::1], f8[::1], f8[:, ::1], f8[::1], f8[::1])",
         "i8(f8[::1], f8[::1, :], f8[::1], f8[:, ::1], f8[::1], f8[::1])",
         "i8(f8[::1], f8[::1, :], f8[::1], f8[::1, :], f8[::1], f8[::1])",
+        "i8(f8[::1], f8[:, ::1], f8[::1], f8[::1, :], f8[::1], f8[::1])",
     ))
 def spherical_penetration_kernel(parameters, outer_rotation, outer_position, inner_rotation, inner_position, out):
     """``out[0]`` = delta = |b - s| - c (m); returns ``STATUS_OK`` or ``STATUS_NONFINITE_PENETRATION``."""

@@ -276,6 +276,7 @@ def _corner_in_guide(parameters, c, outer_rotation, outer_position, inner_rotati
         "i8(f8[::1], f8[:, ::1], f8[::1], f8[:, ::1], f8[::1], f8[::1])",
         "i8(f8[::1], f8[::1, :], f8[::1], f8[:, ::1], f8[::1], f8[::1])",
         "i8(f8[::1], f8[::1, :], f8[::1], f8[::1, :], f8[::1], f8[::1])",
+        "i8(f8[::1], f8[:, ::1], f8[::1], f8[::1, :], f8[::1], f8[::1])",
     ))
 def translational_penetration_kernel(parameters, outer_rotation, outer_position, inner_rotation, inner_position, out):
     """``out[c]`` = delta of every candidate (m); returns ``STATUS_OK`` or ``STATUS_NONFINITE_PENETRATION``."""

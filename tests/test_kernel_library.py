@@ -254,6 +254,7 @@ import sys, json, warnings, numpy as np
 import clearance_contact as cc
 from clearance_contact import compiled
 from clearance_contact.kernel_mode import KernelSwitchWarning
+from clearance_contact.radial_laws import RADIAL_LAWS, radial_law
 warnings.simplefilter("error", KernelSwitchWarning)
 laws = [
     cc.SphericalClearanceJoint(0.015, 0.0151, cc.STEEL, cc.STEEL, friction=cc.CoulombFriction(0.1, 1e-3)),
@@ -261,28 +262,40 @@ laws = [
     cc.TranslationalClearanceJoint(0.05, 0.02, 0.01, 0.0202, 0.0102, cc.STEEL, cc.STEEL, corner_radius=1.5e-3),
 ]
 tilt = np.array([[1.0, 0.0, 0.0], [0.0, np.cos(0.002), -np.sin(0.002)], [0.0, np.sin(0.002), np.cos(0.002)]])
+offset, twist = np.array([1.2e-4, 0.0, 0.0]), np.array([0.1, -0.2, 0.0, 0.0, 0.0, 0.1])
 orders = {"C": np.ascontiguousarray, "F": np.asfortranarray}
-outputs = []
+def read_only(array):
+    array = np.array(array)
+    array.setflags(write=False)
+    return array
+outputs, forces = [], []
 for law in laws:
+    onset = np.full(law.N_CANDIDATES, 0.1)
     for outer in "CF":
         for inner in "CF":
-            state = (orders[outer](np.eye(3)), np.zeros(3), np.array([0.0, 0.0, 0.0, 0.0, 0.0, 0.1]),
-                     orders[inner](tilt), np.array([1.2e-4, 0.0, 0.0]), np.array([0.1, -0.2, 0.0, 0.0, 0.0, 0.0]))
-            result = law.evaluate(*state, np.full(law.N_CANDIDATES, 0.1))
+            rotations = orders[outer](np.eye(3)), orders[inner](tilt)
+            result = law.evaluate(rotations[0], np.zeros(3), twist, rotations[1], offset, -twist, onset)
             outputs.append(np.concatenate([result.normal_force.ravel(), result.wrench_outer, result.wrench_inner]).tolist())
-from clearance_contact.radial_laws import RADIAL_LAWS, radial_law
+            forces.append(float(np.max(result.normal_force)))
+            outputs.append(law.penetration(rotations[0], np.zeros(3), rotations[1], offset).tolist())
+    # a strided rotation (a block of a transform), a read-only twist and a strided onset: copied, not a new specialisation
+    transform = np.eye(4)
+    transform[:3, :3] = tilt
+    strided = law.evaluate(np.eye(3), np.zeros(3), read_only(twist), transform[:3, :3], offset, -twist, np.repeat(onset, 2)[::2])
+    outputs.append(np.concatenate([strided.normal_force.ravel(), strided.wrench_outer, strided.wrench_inner]).tolist())
 for name in RADIAL_LAWS:  # the radial laws' line loads, as clearance contact-laws tabulates them
     law = radial_law(name, 0.01, 0.0101, 0.02, cc.STEEL, cc.STEEL)
     outputs.append([law.line_density(delta) for delta in (0.0, 1e-6, 1e-5, 1e-4)])
-print(json.dumps({"mode": compiled.KERNEL_MODE, "switched_by": compiled.SWITCHED_BY, "numba": "numba" in sys.modules, "outputs": outputs}))
+print(json.dumps({"mode": compiled.KERNEL_MODE, "switched_by": compiled.SWITCHED_BY, "numba": "numba" in sys.modules,
+                  "outputs": outputs, "forces": forces}))
 """
 
 
 def test_the_public_evaluate_stays_on_the_library_with_numpys_rotations(library_dir):
     """Rotations as numpy makes them (C order) or as Pinocchio hands them over (Fortran order), in every
-    combination, for the three shipped laws, and every radial law's line load (``clearance contact-laws``):
-    the library takes every call (no switch to numba, no numba imported), with numba's JIT's results bit for
-    bit; some calls are in contact (a non-zero force)."""
+    combination, for the three shipped laws' forces and penetrations; strided and read-only inputs; every
+    radial law's line load (``clearance contact-laws``): the library takes every call (no switch to numba, no
+    numba imported), with numba's JIT's results bit for bit; every law is in contact (a positive force)."""
     reports = {}
     for mode in ("1", "numba"):
         done = subprocess.run([sys.executable, "-c", _PUBLIC_EVALUATE_SCRIPT], cwd=ROOT, env=_env(library_dir, mode), capture_output=True, text=True, timeout=600)
@@ -292,7 +305,7 @@ def test_the_public_evaluate_stays_on_the_library_with_numpys_rotations(library_
     assert (library["mode"], library["switched_by"], library["numba"]) == ("library", None, False)
     assert jit["mode"] == "numba"
     assert library["outputs"] == jit["outputs"]
-    assert any(value != 0.0 for row in library["outputs"] for value in row)
+    assert len(library["forces"]) == 12 and min(library["forces"]) > 0.0
 
 
 _WITHOUT_NUMBA_SCRIPT = """

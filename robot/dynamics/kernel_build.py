@@ -25,6 +25,7 @@ from pathlib import Path
 #: modules whose ``jit(exports=...)`` kernels go into the library (their callees come with them)
 KERNEL_MODULES: tuple[str, ...] = (
     "clearance_contact.normal_force",
+    "clearance_contact.radial_laws",
     "clearance_contact.spherical",
     "clearance_contact.revolute",
     "clearance_contact.translational",
