@@ -35,6 +35,7 @@ from clearance_contact.kernel_library import (
     source_files,
     toolchain,
 )
+from clearance_contact.kernel_mode import write_text_atomically
 
 __all__ = ["build", "describe"]
 
@@ -122,10 +123,8 @@ def _build_into(folder: Path, exported: dict, current: str) -> dict:
 
 
 def _write_json(path: Path, record: dict) -> None:
-    """Write ``record`` to ``path`` atomically (a temporary file, then a rename)."""
-    partial = path.with_name(f"{path.name}.{os.getpid()}")
-    partial.write_text(json.dumps(record, indent=1))
-    os.replace(partial, path)
+    """Write ``record`` to ``path`` atomically (:func:`~.kernel_mode.write_text_atomically`)."""
+    write_text_atomically(path, json.dumps(record, indent=1))
 
 
 def _compile(kernels: dict, module_name: str, output: Path) -> dict:

@@ -50,7 +50,7 @@ import numpy as np
 from clearance_contact.extension import import_extension
 
 __all__ = [
-    "MANIFEST", "FAILURE", "MODE_VARIABLE", "requested_mode", "KernelLibraryError", "Library", "library_folder", "library_folders", "environment_key", "toolchain",
+    "MANIFEST", "FAILURE", "MODE_VARIABLE", "MODE_VALUES", "requested_mode", "child_environment", "KernelLibraryError", "Library", "library_folder", "library_folders", "environment_key", "toolchain",
     "source_files", "digest", "read_record", "fresh_record", "failed_build", "fresh_library", "is_fresh", "load", "guard", "guard_spec",
 ]  # fmt: skip
 
@@ -73,10 +73,23 @@ MODE_VARIABLE = "CLEARANCE_CONTACT_JIT"
 """The environment variable that chooses how kernels run: ``0`` plain Python, ``numba`` numba's JIT, else the library."""
 
 
+MODE_VALUES = {"python": "0", "numba": "numba", "library": "1"}
+"""The value of :data:`MODE_VARIABLE` that asks for each kernel mode."""
+
+
 def requested_mode() -> str:
     """What :data:`MODE_VARIABLE` asks for: ``"python"``, ``"numba"``, or ``"library"`` (the default; numba's JIT
     where no fresh library is found)."""
     return {"0": "python", "numba": "numba"}.get(os.environ.get(MODE_VARIABLE, "1"), "library")
+
+
+def child_environment(mode: str) -> dict:
+    """This process's environment for a child Python process that runs kernels in ``mode`` (a key of
+    :data:`MODE_VALUES`) from this process's packages (their folder, :data:`ANCHOR`, first on ``PYTHONPATH``:
+    a script may have put a checkout first on ``sys.path``)."""
+    environment = dict(os.environ, **{MODE_VARIABLE: MODE_VALUES[mode]})
+    environment["PYTHONPATH"] = os.pathsep.join(filter(None, [str(ANCHOR), environment.get("PYTHONPATH", "")]))
+    return environment
 
 
 #: numba settings that change the code it generates (its optimisation level, bounds checks, target CPU)

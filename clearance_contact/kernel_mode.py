@@ -38,6 +38,7 @@ import os
 import sys
 import warnings
 from pathlib import Path
+from typing import Callable
 
 __all__ = [
     "jit", "JIT_ENABLED", "KERNEL_MODE", "SWITCHED_BY", "KERNELS", "Kernel", "KernelSwitchWarning", "switch_to_numba",
@@ -66,9 +67,6 @@ KERNELS: dict[str, Kernel] = {}
 
 KERNEL_MODE: str = "python"
 """``"library"``, ``"numba"`` or ``"python"`` (module docstring)."""
-
-JIT_ENABLED: bool = False
-"""True when the kernels run compiled (``KERNEL_MODE`` is ``"library"`` or ``"numba"``)."""
 
 _numba = None
 _LIBRARY = None  # the loaded kernel_library.Library in "library" mode
@@ -139,7 +137,7 @@ def switch_to_numba(reason: str = "asked") -> None:
     calls then go to the dispatcher (a guard's ``fallback`` is set to it), so that
     identities (``LAW_IDS``) hold.
     """
-    global KERNEL_MODE, SWITCHED_BY, JIT_ENABLED
+    global KERNEL_MODE, SWITCHED_BY
     if KERNEL_MODE != "library":
         return
     SWITCHED_BY = reason
@@ -165,18 +163,27 @@ def switch_to_numba(reason: str = "asked") -> None:
             if replacement is not None and replacement[0] is value:
                 namespace[name] = replacement[1]
     KERNEL_MODE = "numba" if _numba is not None else "python"
-    JIT_ENABLED = KERNEL_MODE != "python"
 
 
-_WATCHED_CACHES: list[tuple[list, Path]] = []
+def __getattr__(name: str):
+    """``JIT_ENABLED``: whether the kernels run compiled (``KERNEL_MODE`` is ``"library"`` or ``"numba"``)."""
+    if name == "JIT_ENABLED":
+        return KERNEL_MODE != "python"
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
 
-def watch_numba_cache(sources, cache_directory) -> None:
-    """Have numba's cache in ``cache_directory`` dropped if ``sources`` changed (:func:`drop_stale_caches`):
-    now if numba runs, else when it starts (a library process never hashes them)."""
-    _WATCHED_CACHES.append((list(sources), Path(cache_directory)))
+_PACKAGE = Path(__file__).resolve().parent
+# (sources, cache folder): numba's caches to drop when their sources change; the sources as a callable,
+# listed only when numba starts (a library process never lists nor hashes them)
+_WATCHED_CACHES: list[tuple[Callable[[], list], Path]] = [(lambda: list(_PACKAGE.glob("*.py")), _PACKAGE / "__pycache__")]
+
+
+def watch_numba_cache(sources: Callable[[], list], cache_directory) -> None:
+    """Have numba's cache in ``cache_directory`` dropped if the files ``sources()`` lists changed
+    (:func:`drop_stale_caches`): now if numba runs, else when it starts."""
+    _WATCHED_CACHES.append((sources, Path(cache_directory)))
     if KERNEL_MODE == "numba":
-        drop_stale_caches(*_WATCHED_CACHES[-1])
+        drop_stale_caches(sources(), cache_directory)
 
 
 def _start_numba():
@@ -187,10 +194,21 @@ def _start_numba():
     except ImportError:  # numba not installed (or blocked): plain Python
         return _identity
     _numba = numba
-    package = Path(__file__).resolve().parent
-    for sources, folder in [(list(package.glob("*.py")), package / "__pycache__"), *_WATCHED_CACHES]:
-        drop_stale_caches(sources, folder)
+    for sources, folder in _WATCHED_CACHES:
+        drop_stale_caches(sources(), folder)
     return numba.njit(cache=True)
+
+
+def write_text_atomically(path: Path, text: str) -> None:
+    """Write ``text`` to ``path`` through a temporary file and a rename (readers never see a partial file;
+    the temporary file is removed if the write fails)."""
+    partial = path.with_name(f"{path.name}.{os.getpid()}")
+    try:
+        partial.write_text(text)
+        os.replace(partial, path)
+    except BaseException:
+        partial.unlink(missing_ok=True)
+        raise
 
 
 def _identity(function):
@@ -220,9 +238,7 @@ def drop_stale_caches(sources, cache_directory) -> bool:
         folder.mkdir(parents=True, exist_ok=True)
         for cached in list(folder.glob("*.nbi")) + list(folder.glob("*.nbc")):
             cached.unlink(missing_ok=True)
-        partial = folder / f"numba_sources.sha256.{os.getpid()}"
-        partial.write_text(digest.hexdigest())
-        os.replace(partial, stamp)
+        write_text_atomically(stamp, digest.hexdigest())
     except OSError:
         return False
     return True
@@ -230,7 +246,7 @@ def drop_stale_caches(sources, cache_directory) -> bool:
 
 def _choose_mode() -> None:
     """Set :data:`KERNEL_MODE` from ``CLEARANCE_CONTACT_JIT``, the library's freshness and numba's presence."""
-    global KERNEL_MODE, JIT_ENABLED, _LIBRARY
+    global KERNEL_MODE, _LIBRARY
     from clearance_contact import kernel_library
 
     requested = kernel_library.requested_mode()
@@ -242,7 +258,6 @@ def _choose_mode() -> None:
         KERNEL_MODE = "library"
     elif _start_numba() is not _identity:
         KERNEL_MODE = "numba"
-    JIT_ENABLED = KERNEL_MODE != "python"
 
 
 _choose_mode()

@@ -173,17 +173,13 @@ def calibrated_scene_file(folder: Path, name: str, extra: str = "") -> Path:
 
 @pytest.fixture(scope="session")
 def kernel_library_dir() -> Path:
-    """The session's kernel library folder (``library_folder()`` under this session's ``CLEARANCE_KERNEL_DIR``), built by
-    ``python -m robot.dynamics.kernel_build`` if no command built it yet (15-40 s, once a session). Processes the
+    """The session's kernel library folder (``library_folder()`` under this session's ``CLEARANCE_KERNEL_DIR``), built
+    as a command builds it (``ensure_library``) if no command built it yet (15-40 s, once a session). Processes the
     tests start find it by default; pass its parent as ``CLEARANCE_KERNEL_DIR`` to one that was given another."""
-    from clearance_contact.kernel_library import MANIFEST, library_folder
+    from clearance_contact.kernel_library import is_fresh, library_folder
+    from robot.dynamics.kernel_build import ensure_library
 
-    folder = library_folder()
-    environment = dict(os.environ, CLEARANCE_CONTACT_JIT="numba")
-    done = subprocess.run(
-        [sys.executable, "-m", "robot.dynamics.kernel_build"], cwd=Path(__file__).resolve().parents[1], env=environment,
-        capture_output=True, text=True, timeout=900,
-    )  # fmt: skip
-    assert done.returncode == 0, done.stderr[-3000:]
-    assert Path(done.stdout.strip()) == folder / MANIFEST
-    return folder
+    messages: list[str] = []
+    status = ensure_library(announce=messages.append, wanted=True, retry_failed=True)
+    assert status in ("fresh", "built") and is_fresh(), f"{status}: {messages}"
+    return library_folder()

@@ -167,9 +167,9 @@ def test_a_guard_takes_exactly_what_numba_types_as_the_signature(library):
     (what numba types as declared is taken: no needless fall-back), for every declared type."""
     declared = _declared_types(library)
     assert len(declared) >= 8
-    checked = 0
     for numba_type, description in declared:
         spec = kernel_library.guard_spec(description)
+        checked = 0
         for label, value in _arrays() + _scalars():
             taken = library.guards.check(value, spec)
             expected = _numba_takes(value, numba_type)
@@ -178,7 +178,7 @@ def test_a_guard_takes_exactly_what_numba_types_as_the_signature(library):
                 continue
             assert taken == expected, f"{numba_type} given {label}: guard {taken}, numba {expected}"
             checked += taken
-    assert checked >= len(declared)  # each declared type took at least one value
+        assert checked >= 1, numba_type  # each declared type took at least one value of the battery
 
 
 def test_a_tuple_argument_is_checked_item_by_item(library):

@@ -72,16 +72,19 @@ def test_every_nudge_is_one_ulp_of_its_blocks_scale(scene_runs, scene):
     variants = perturbations(run, run.scene.solver, tuple(range(run.y0.shape[0])))
     nudged = [name for name in variants if name.startswith("y0[")]
     assert len(nudged) == nq + nv  # every q and v; the works are skipped
+    small = 0
     for name in nudged:
         y0 = variants[name][0].y0
         (index,) = np.flatnonzero(y0 != run.y0)
         block = slice(0, nq) if index < nq else slice(nq, nq + nv)
         scale = max(1.0, float(np.max(np.abs(run.y0[block]))))
         assert y0[index] == run.y0[index] + np.spacing(scale)
-        # rounding's size for the block, whatever the coordinate's own size: ~2^-52 of the scale (the sum
-        # rounds to the coordinate's own ulp, so the realised move is within a factor 2 of it)
-        moved = y0[index] - run.y0[index]
-        assert scale * 2.0**-53 <= moved <= scale * 2.0**-51, (name, moved, scale)
+        # rounding's size for the block, not the coordinate's own ulp: they differ where the coordinate is
+        # much smaller than its block's largest (a coordinate near zero would move by ~1e-300)
+        if abs(run.y0[index]) < 0.25 * scale:
+            assert y0[index] - run.y0[index] > np.spacing(run.y0[index]), (name, scale)
+            small += 1
+    assert small >= 1  # the scene has such coordinates (zeros among them)
 
 
 def test_a_block_at_rest_is_nudged_by_one_ulp_of_one(slider_crank):

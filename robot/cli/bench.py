@@ -23,7 +23,6 @@ from __future__ import annotations
 
 import argparse
 import json
-import os
 import platform
 import subprocess
 import statistics
@@ -148,9 +147,9 @@ def revolute_cases(repeats: int, number: int) -> dict:
 
 def plain_python_cases(repeats: int, number: int) -> dict:
     """The same cases with CLEARANCE_CONTACT_JIT=0 (subprocess): the plain-Python run of the same source."""
-    env = dict(os.environ, CLEARANCE_CONTACT_JIT="0")
-    root = Path(__file__).resolve().parents[2]  # the checkout (or site-packages) holding robot/
-    env["PYTHONPATH"] = str(root) + os.pathsep + env.get("PYTHONPATH", "")
+    from clearance_contact.kernel_library import child_environment
+
+    env = child_environment("python")
     code = (
         "import json; from robot.cli import bench as b; "
         f"print(json.dumps(b.spherical_cases({repeats}, {number}) | b.revolute_cases({repeats}, {number})))"

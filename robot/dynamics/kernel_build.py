@@ -17,7 +17,6 @@ build-kernels`` runs).
 from __future__ import annotations
 
 import importlib
-import os
 import subprocess
 import sys
 from pathlib import Path
@@ -58,7 +57,7 @@ def ensure_library(force: bool = False, announce=None, wanted: bool | None = Non
     sources and environment is not tried again (``force`` or ``retry_failed`` do). ``announce(text)`` is
     told before a build starts (15-40 s) and why one failed (default: standard error).
     """
-    from clearance_contact.kernel_library import ANCHOR, MODE_VARIABLE, failed_build, is_fresh, requested_mode
+    from clearance_contact.kernel_library import child_environment, failed_build, is_fresh, requested_mode
 
     if not (requested_mode() == "library" if wanted is None else wanted):
         return "off"
@@ -73,11 +72,8 @@ def ensure_library(force: bool = False, announce=None, wanted: bool | None = Non
         return f"unavailable: {earlier}"
     say("compiling the kernel library (once per version of the sources; 15-40 s)...")
     command = [sys.executable, "-m", "robot.dynamics.kernel_build", *(["--force"] if force else [])]
-    # the child builds this process's packages (a script may have put a checkout first on sys.path)
-    environment = dict(os.environ, **{MODE_VARIABLE: "numba"})
-    environment["PYTHONPATH"] = os.pathsep.join(filter(None, [str(ANCHOR), environment.get("PYTHONPATH", "")]))
-    try:
-        done = subprocess.run(command, env=environment, capture_output=True, text=True)
+    try:  # the child builds this process's packages, with numba's kernels
+        done = subprocess.run(command, env=child_environment("numba"), capture_output=True, text=True)
     except OSError as exc:  # the interpreter cannot be started again (a frozen or sandboxed process)
         done = subprocess.CompletedProcess(command, 1, "", str(exc))
     if done.returncode != 0:

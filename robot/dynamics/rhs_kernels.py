@@ -58,9 +58,9 @@ from clearance_contact.revolute import RevoluteClearanceJoint, revolute_kernel
 from clearance_contact.spherical import SphericalClearanceJoint, spherical_kernel
 from clearance_contact.translational import TranslationalClearanceJoint, translational_kernel
 
-# this package's compiled code calls clearance_contact's law kernels (see drop_stale_caches)
+# this package's compiled code calls clearance_contact's law kernels (see watch_numba_cache)
 _ROBOT = Path(__file__).resolve().parent
-watch_numba_cache([*_ROBOT.glob("*.py"), *(_ROBOT.parents[1] / "clearance_contact").glob("*.py")], _ROBOT / "__pycache__")
+watch_numba_cache(lambda: [*_ROBOT.glob("*.py"), *(_ROBOT.parents[1] / "clearance_contact").glob("*.py")], _ROBOT / "__pycache__")
 
 SE3_FLOATS = 12  # 3x3 rotation (column-major) + translation
 

@@ -178,8 +178,8 @@ def for_workspace(dynamics: D.DynamicsModel, workspace: D.DynamicsWorkspace) -> 
 
 
 def _applies(compiled: D.CompiledTerms | None) -> bool:
-    """The compiled right-hand side, every law a shipped compiled law (``robot.dynamics.rhs_kernels.LAW_IDS``)."""
-    return compiled is not None and all(site.law_kernel in K.LAW_IDS for site in compiled.sites)
+    """The compiled right-hand side, every law a shipped compiled law (``CompiledTerms.sites_fused``)."""
+    return compiled is not None and compiled.sites_fused
 
 
 def finite_difference_jacobian(fun, t: float, y: np.ndarray, relative_step: float = 1e-7, base: np.ndarray | None = None) -> np.ndarray:

@@ -26,7 +26,7 @@ class HermiteDense(DenseOutput):
         self.y_old, self.y, self.f_old, self.f = y_old, y, f_old, f
 
     def _call_impl(self, t):
-        if t.ndim == 0:
+        if isinstance(t, float) or t.ndim == 0:
             # in Python floats: the same IEEE operations (pow included) as numpy's scalars, at a fraction of the cost
             h = float(self.h)
             h00, h10, h01, h11 = _basis((float(t) - float(self.t_old)) / h)

@@ -142,12 +142,15 @@ class DenseOutput:
 
     def __call__(self, t):
         """The state at ``t`` (a time: shape ``(n,)``; a 1-D array of k times: ``(n, k)``)."""
+        if isinstance(t, float):  # the step loop's calls (output times, event and peak location): no array layer
+            return self._call_impl(t)
         t = np.asarray(t)
         if t.ndim > 1:
             raise ValueError("`t` must be a float or a 1-D array.")
         return self._call_impl(t)
 
-    def _call_impl(self, t: np.ndarray) -> np.ndarray:
+    def _call_impl(self, t: float | np.ndarray) -> np.ndarray:
+        """The state at ``t``: a float or a 0-d array (one time), or a 1-D array of times."""
         raise NotImplementedError
 
 
@@ -158,8 +161,8 @@ class ConstantDenseOutput(DenseOutput):
         super().__init__(t_old, t)
         self.value = value
 
-    def _call_impl(self, t: np.ndarray) -> np.ndarray:
-        if t.ndim == 0:
+    def _call_impl(self, t: float | np.ndarray) -> np.ndarray:
+        if isinstance(t, float) or t.ndim == 0:
             return self.value
         out = np.empty((self.value.shape[0], t.shape[0]))
         out[:] = self.value[:, None]

@@ -315,11 +315,6 @@ class _CVODEDense(DenseOutput):
         self.t_end = t
         self.y_end = solver.y.copy()
 
-    def __call__(self, t):
-        if isinstance(t, float):  # the step loop's calls (output times, event and peak location): one time, fewer layers
-            return self._one(t)
-        return super().__call__(t)
-
     def _one(self, t):
         if t == self.t_end:
             return self.y_end.copy()
@@ -332,7 +327,7 @@ class _CVODEDense(DenseOutput):
         return np.array(result.y, dtype=float)
 
     def _call_impl(self, t):
-        if np.ndim(t) == 0:
+        if isinstance(t, float) or t.ndim == 0:
             return self._one(float(t))
         return np.column_stack([self._one(float(tt)) for tt in np.asarray(t)])
 

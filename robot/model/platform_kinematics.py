@@ -69,9 +69,16 @@ class PlatformLayout:
 
     @cached_property
     def plane_normal(self) -> np.ndarray:
-        """Unit axis of the R-P-S limb's revolute: the normal of the plane its tip stays in (read-only)."""
+        """Unit axis of the R-P-S limb's revolute: the normal of the plane its tip stays in (read-only).
+
+        UnreachablePoseError unless it is (close to) the world y axis: the pose's x and z coordinates
+        then parametrise that plane.
+        """
         axis = self.limbs[self.plane_limb].revolute_axis
-        return _read_only(axis / np.linalg.norm(axis))
+        normal = axis / np.linalg.norm(axis)
+        if abs(normal @ np.array([0.0, 1.0, 0.0])) < 0.5:
+            raise UnreachablePoseError("the R-P-S axis must be (close to) the world y axis for the x-z pose coordinates")
+        return _read_only(normal)
 
     @classmethod
     def from_mechanism(cls, mechanism: Mechanism, platform_link: str = "platform") -> "PlatformLayout":
@@ -174,11 +181,8 @@ def platform_state(layout: PlatformLayout, pose: np.ndarray, rate: np.ndarray | 
     x, z, roll, pitch, yaw = pose
     rotation = euler_zyx(roll, pitch, yaw)
     limb = layout.limbs[layout.plane_limb]
-    normal = layout.plane_normal
+    normal = layout.plane_normal  # UnreachablePoseError unless (close to) the world y axis
     # tip of the R limb in the plane normal to its axis through its base point
-    e_y = np.array([0.0, 1.0, 0.0])
-    if abs(normal @ e_y) < 0.5:
-        raise UnreachablePoseError("the R-P-S axis must be (close to) the world y axis for the x-z pose coordinates")
     lever = rotation @ limb.platform_point  # platform origin to the R limb's tip, world
     y = (normal @ limb.base_point - normal[0] * (x + lever[0]) - normal[2] * (z + lever[2])) / normal[1] - lever[1]
     position = np.array([x, y, z])

@@ -75,6 +75,7 @@ import pinocchio as pin
 
 from robot.errors import RedundantConstraintWarning, SingularConfigurationError
 from robot.model import constraints as C
+from robot.model.lapack import pivoted_qr  # scipy's dgeqp3 without scipy.linalg's 0.2 s of imports
 
 LWA = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
 
@@ -141,8 +142,6 @@ def independent_rows(scaled: np.ndarray, tolerance: float = REDUNDANCY_TOLERANCE
     nonzero = np.flatnonzero(np.linalg.norm(scaled, axis=1) > tolerance) if scaled.size else np.zeros(0, dtype=int)
     if nonzero.size == 0:
         return nonzero
-    from robot.model.lapack import pivoted_qr  # scipy's dgeqp3 without scipy.linalg's 0.2 s of imports
-
     triangle, pivots = pivoted_qr(scaled[nonzero].T)
     diagonal = np.abs(np.diag(triangle))
     rank = int(np.sum(diagonal > tolerance * diagonal[0]))

@@ -239,13 +239,9 @@ KERNEL_MODES = ("library", "numba")
 
 
 def _child_env(kernels: str = "library") -> dict:
-    root = Path(__file__).resolve().parents[3]
-    env = dict(os.environ)
-    from clearance_contact.kernel_library import MODE_VARIABLE
+    from clearance_contact.kernel_library import child_environment
 
-    env[MODE_VARIABLE] = "numba" if kernels == "numba" else "1"
-    env["PYTHONPATH"] = os.pathsep.join([str(root), env.get("PYTHONPATH", "")]).rstrip(os.pathsep)
-    return env
+    return child_environment(kernels)
 
 
 def measure_process(scene: str, python: str = sys.executable, kernels: str = "library") -> dict:
