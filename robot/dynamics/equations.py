@@ -61,6 +61,7 @@ from robot.model import constraints as C
 from robot.model import redundancy as R
 from robot.dynamics import rhs_kernels as K
 from robot.model.mechanism import ClearanceSite, Mechanism
+from robot.model.pinocchio_arrays import frame_jacobian, tangent_map_product
 from robot.dynamics.forces.force_set import BoundForces, ForceSet
 
 LWA = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
@@ -525,7 +526,7 @@ def configuration_rate(dynamics: DynamicsModel, workspace: DynamicsWorkspace, q:
     rate ``0.5 q (x) (omega, 0)`` with ``omega`` in the body frame. Computed by
     Pinocchio's tangent map (``tangentMapProduct``); ``q`` must have unit quaternions.
     """
-    return np.reshape(pin.tangentMapProduct(dynamics.mechanism.model, q, np.reshape(v, (-1, 1))), -1)
+    return tangent_map_product(dynamics.mechanism.model, q, v)
 
 
 @dataclass
@@ -675,7 +676,7 @@ def state_derivative(
     if workspace.forces is not None:
         total = total + workspace.forces.evaluate(t, q, v)
     out[nq : nq + nv] = solve_kkt(dynamics, workspace, total, kernel.phi_q, drift)
-    out[:nq] = pin.tangentMapProduct(model, q, v[:, None])
+    out[:nq] = tangent_map_product(model, q, v)
     # actuator power: driving force (= Pinocchio's multiplier of the driving row) times the actuator rate
     out[nq + nv] = data.lambda_c[workspace.rows.n_closure_kept :] @ v[mechanism.actuator_v_index] if kernel.driven else 0.0
     out[nq + nv + 1] = 0.0 if tau is None else tau @ v
@@ -722,7 +723,7 @@ def _compiled_state_derivative(
     forces = workspace.forces
     qdd = solve_kkt(dynamics, workspace, tau if forces is None else tau + forces.evaluate(t, q, v), phi_q, compiled.drift)
     # [q', qdd, actuator power (driving force = Pinocchio's multiplier of the driving row, times the rate), contact power]
-    K.finish_derivative(work, indices, data.lambda_c, workspace.rows.n_closure_kept, v, qdd, pin.tangentMapProduct(model, q, v), out)
+    K.finish_derivative(work, indices, data.lambda_c, workspace.rows.n_closure_kept, v, qdd, tangent_map_product(model, q, v), out)
     if forces is not None:
         _add_force_powers(forces, out, compiled.nq_nv)
     return out
@@ -863,8 +864,8 @@ class _SiteViews:
 
     def add_generalized_force(self, model: pin.Model, data: pin.Data, result, tau: np.ndarray) -> None:
         """tau += J_outer^T w_outer + J_inner^T w_inner (LOCAL_WORLD_ALIGNED frame Jacobians)."""
-        tau += pin.getFrameJacobian(model, data, self.outer_frame, LWA).T @ result.wrench_outer
-        tau += pin.getFrameJacobian(model, data, self.inner_frame, LWA).T @ result.wrench_inner
+        tau += frame_jacobian(model, data, self.outer_frame).T @ result.wrench_outer
+        tau += frame_jacobian(model, data, self.inner_frame).T @ result.wrench_inner
 
 
 def penetrations(dynamics: DynamicsModel, workspace: DynamicsWorkspace, q: np.ndarray) -> np.ndarray:

@@ -43,6 +43,7 @@ import numpy as np
 import pinocchio as pin
 
 from robot.model.mechanism import Closure, Mechanism
+from robot.model.pinocchio_arrays import constraints_jacobian, frame_jacobian
 
 LWA = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
 
@@ -266,7 +267,7 @@ class ConstraintKernel:
         if self._spherical:
             for calc, constraint_data in self._calcs:
                 calc(model, data, constraint_data)
-            jac = pin.getConstraintsJacobian(model, data, self._models, self._datas)
+            jac = constraints_jacobian(model, data, self._models, self._datas, len(self._rows))
             if self._sph_slice is not None:
                 self.phi_q[self._sph_slice] = jac
             else:
@@ -378,8 +379,8 @@ def _closure_jacobian(model: pin.Model, data: pin.Data, rows: ClosureRows, out: 
     """
     a, b, r = rows.closure.frame_a, rows.closure.frame_b, rows.row
     kind = rows.closure.kind
-    jac_a = pin.getFrameJacobian(model, data, a, LWA)
-    jac_b = pin.getFrameJacobian(model, data, b, LWA)
+    jac_a = frame_jacobian(model, data, a)
+    jac_b = frame_jacobian(model, data, b)
     rotation_a = data.oMf[a].rotation
     if kind == "prismatic":
         gap = data.oMf[a].translation - data.oMf[b].translation

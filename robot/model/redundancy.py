@@ -76,8 +76,8 @@ import pinocchio as pin
 from robot.errors import RedundantConstraintWarning, SingularConfigurationError
 from robot.model import constraints as C
 from robot.model.lapack import pivoted_qr  # scipy's dgeqp3 without scipy.linalg's 0.2 s of imports
+from robot.model.pinocchio_arrays import frame_jacobian
 
-LWA = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
 
 #: relative tolerance of the rank decision (scaled rows, |R_kk| against |R_11|)
 REDUNDANCY_TOLERANCE = 1e-9
@@ -132,7 +132,7 @@ def row_scales(constraints: C.ConstraintSet, model: pin.Model, data: pin.Data, p
         position = 2 if rows.closure.kind == "prismatic" else 3  # prismatic centring: 2 position rows, 3 rotation rows
         scales[r : r + position] = np.linalg.norm(phi_q[r : r + position])  # the rows are J_a^lin - J_b^lin (world axes)
         if rows.closure.kind in ("revolute", "prismatic"):
-            relative = pin.getFrameJacobian(model, data, rows.closure.frame_a, LWA)[3:] - pin.getFrameJacobian(model, data, rows.closure.frame_b, LWA)[3:]
+            relative = frame_jacobian(model, data, rows.closure.frame_a)[3:] - frame_jacobian(model, data, rows.closure.frame_b)[3:]
             scales[r + position : r + 5] = np.linalg.norm(relative)
     return scales
 

@@ -26,11 +26,11 @@ import numpy as np
 import pinocchio as pin
 
 from robot.model import constraints as C
+from robot.model.pinocchio_arrays import frame_jacobian
 from robot.dynamics import equations as D
 from robot.run import Run
 from robot.integration.simulation import SolverOptions, initial_onset_rates, integrate
 
-LWA = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
 
 
 def reference_state_derivative(
@@ -62,8 +62,8 @@ def reference_state_derivative(
         site = contact.site
         result = contact.law.evaluate(*D.element_states(data, model, site), onset[contact.candidates])
         if np.any(result.in_contact):
-            tau += pin.getFrameJacobian(model, data, site.outer_frame, LWA).T @ result.wrench_outer
-            tau += pin.getFrameJacobian(model, data, site.inner_frame, LWA).T @ result.wrench_inner
+            tau += frame_jacobian(model, data, site.outer_frame).T @ result.wrench_outer
+            tau += frame_jacobian(model, data, site.inner_frame).T @ result.wrench_inner
     applied = np.zeros(nv) if dynamics.forces is None else dynamics.forces.bind(model, data).evaluate(t, q, v)
     if minimum_norm:
         qdd, multipliers = _dense_kkt(model, data, q, tau + applied, phi_q, rhs)

@@ -15,8 +15,8 @@ import numpy as np
 import pinocchio as pin
 
 from robot.dynamics.forces.base import BodyPoint
+from robot.model.pinocchio_arrays import frame_jacobian, joint_jacobian
 
-LWA = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
 
 
 class PointKinematics:
@@ -50,10 +50,10 @@ class PointKinematics:
         """3 x nv: ``v_p = J v`` (world axes)."""
         if point.joint == 0:
             return self._zero
-        return pin.getFrameJacobian(self.model, self.data, point.joint, self._views(point)[2], LWA)[:3]
+        return frame_jacobian(self.model, self.data, point.joint, placement=self._views(point)[2])[:3]
 
     def angular_jacobian(self, joint: int) -> np.ndarray:
         """3 x nv: the angular velocity (world axes) of the body of joint ``joint``."""
         if joint == 0:
             return self._zero
-        return pin.getJointJacobian(self.model, self.data, joint, LWA)[3:]
+        return joint_jacobian(self.model, self.data, joint)[3:]
