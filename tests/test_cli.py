@@ -354,3 +354,10 @@ def test_bench_times_every_radial_law_and_dissipation_model(capsys, tmp_path):
         case = report["cases"][f"revolute_skew_in_contact_{name}"]
         assert case["median_us"] > 0 and case["kernel"]["median_us"] > 0
         assert f"revolute_skew_in_contact_{name}" in printed
+
+
+def test_check_shows_the_scene_description(capsys, tmp_path):
+    """docs/scenes.md: a scene's ``description`` is shown by ``clearance run --scene NAME --check``."""
+    path = scene_file(tmp_path, 'extends = "ideal"\nname = "described"\ndescription = "a note for the user"\n')
+    assert main(["run", "--scene", path, "--check"]) == EXIT_OK
+    assert "  a note for the user" in capsys.readouterr().out.splitlines()

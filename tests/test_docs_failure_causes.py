@@ -40,6 +40,7 @@ KNOWN_CAUSES = {
     "constraint drift",
     "step size collapse",
     "event chattering",
+    "integration stalled",
     "wall time",
     "unphysical pose",
     "Newton divergence",

@@ -67,3 +67,61 @@ def test_bad_scene_on_the_command_line_exits_2(tmp_path):
     )
     assert completed.returncode == 2
     assert "shipped scenes" in completed.stderr
+
+
+class _Switching:
+    """y' = -sign(y): y reaches 0 at t = 1, then the right-hand side switches sign between the stages
+    of every step (as constraint rows switching near a rank loss do), and an explicit method creeps on."""
+
+    size, n_candidates = 1, 0
+    penetration_bounds = np.zeros(0)
+    structure = jacobian = None
+
+    def __init__(self):
+        self.rhs_calls = 0
+
+    def derivative(self, t, y, onset):
+        self.rhs_calls += 1
+        return -np.sign(y)
+
+    def probe(self, t, y, onset, residual=True):
+        from robot.dynamics.probe import Probe
+
+        return Probe(np.zeros(0), np.zeros(0), 0.0, np.zeros(0))
+
+    def penetrations(self, t, y):
+        return np.zeros(0)
+
+    def normalise(self, y):
+        return np.array(y, dtype=float)
+
+    def replica(self):
+        return _Switching()
+
+
+def test_a_creeping_run_fails_as_stalled_instead_of_running_forever():
+    """Steps of ~1e-8 s (far above min_step) from t = 1 on: at that pace 3 s need ~2e8 steps > max_steps."""
+    from robot.integration.event_loop import EventDrivenIntegrator
+    from robot.integration.options import STALL_WINDOW, FailureLimits, SolverOptions
+
+    options = SolverOptions(method="RK45", rtol=1e-10, atol=1e-10, max_step=0.1)
+    trajectory = EventDrivenIntegrator(_Switching(), np.array([1.0]), (0.0, 3.0), options).run()
+    assert trajectory.status == -1 and trajectory.cause == "integration stalled"
+    assert 1.0 <= trajectory.t_end < 1.01 and trajectory.n_steps <= 3 * STALL_WINDOW
+    assert "max_steps" in trajectory.message and trajectory.message.startswith("t=1.")
+    # with a budget its pace fits in, the same creeping run goes on through two windows to its end
+    generous = FailureLimits(max_steps=1e12)
+    trajectory = EventDrivenIntegrator(_Switching(), np.array([1.0]), (0.0, 1.0002), options, generous).run()
+    assert trajectory.status == 0 and trajectory.t_end == pytest.approx(1.0002) and trajectory.n_steps > 2 * STALL_WINDOW
+
+
+def test_max_steps_is_a_limit_of_the_scene(tmp_path):
+    from robot.errors import SceneError
+    from robot.scene import load_scene
+
+    path = tmp_path / "budget.toml"
+    path.write_text('extends = "spherical"\nname = "budget"\n[limits]\nmax_steps = 5e5\n')
+    assert load_scene(str(path)).limits.max_steps == 5e5
+    path.write_text('extends = "spherical"\nname = "budget"\n[limits]\nmax_steps = 0\n')
+    with pytest.raises(SceneError, match=r"max_steps=0 is out of range \[1\.0, inf\]"):
+        load_scene(str(path))

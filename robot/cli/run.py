@@ -43,6 +43,8 @@ def execute(args: argparse.Namespace) -> int:
         if args.check:
             print(f"{run.scene.name}: scene valid; mechanism {run.scene.mechanism_path.name}, nq {run.mechanism.model.nq}, "
                   f"clearance joints {list(run.scene.clearance_joints) or 'none'}, duration {run.scene.duration:g} s")
+            if run.scene.description:
+                print(f"  {run.scene.description}")
             return EXIT_OK
         path = out / f"{run.scene.file_stem}.npz"
         stops.saving = f"saving the result to {path}"

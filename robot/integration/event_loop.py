@@ -34,6 +34,7 @@ with ``status`` -1, the ``cause`` and the records so far.
 
 from __future__ import annotations
 
+import math
 import time
 from typing import Callable, NamedTuple, Protocol
 
@@ -46,7 +47,7 @@ from robot.integration import methods as registry
 from robot.integration.brent import NoSignChange, brentq
 from robot.integration.events import HIDDEN, ONSET, OVER_BOUND, PEAK, all_finite, first_contact_time, hidden_contact, step_flags
 from robot.integration.force_peaks import ForcePeaks, derivative_or_inf
-from robot.integration.options import FailureLimits, SolverOptions
+from robot.integration.options import STALL_WINDOW, FailureLimits, SolverOptions
 from robot.integration.records import FAILED, SUCCESS, OutputTimes, Records, Trajectory
 from robot.integration import records as R
 from robot.integration.solvers import SecondOrderStructure, make_solver
@@ -143,6 +144,7 @@ class EventDrivenIntegrator:
         self.max_onset_overshoot = 0.0
         self.first_step = options.first_step
         self.stalled = 0
+        self.pace_mark = self.t0  # time at the start of the current STALL_WINDOW of steps
         self.solver = None
         self.pen = self.rate = None  # penetrations and rates at (self.t, self.y)
 
@@ -271,7 +273,23 @@ class EventDrivenIntegrator:
                 raise _Failure("step size collapse", f"t={t_new:.9g} s: step size {h:.3e} s below {self.limits.min_step:.1e} s")
         if not all_finite(y_new):
             raise _Failure("non-finite state", f"t={t_new:.9g} s: the state is not finite")
+        if self.counts["steps"] % STALL_WINDOW == 0:
+            self.check_pace(t_new)
         return _Step(solver.t_old, t_new, y_new, self.probe(t_new, y_new))
+
+    def check_pace(self, t_new: float) -> None:
+        """Every ``STALL_WINDOW`` steps: the steps taken plus those the last window's pace needs to the end."""
+        steps, advance = self.counts["steps"], t_new - self.pace_mark
+        self.pace_mark = t_new
+        remaining = self.t_final - t_new
+        needed = steps + (STALL_WINDOW * remaining / advance if advance > 0 else math.inf) if remaining > 0 else steps
+        if needed > self.limits.max_steps:
+            raise _Failure(
+                "integration stalled",
+                f"t={t_new:.9g} s: the last {STALL_WINDOW} steps advanced {advance:.3e} s; at that pace the run needs "
+                f"{needed:.2e} steps (limit max_steps = {self.limits.max_steps:.2e}): a singular configuration or a "
+                "right-hand side that is not smooth (e.g. constraint rows switching near a rank loss)",
+            )
 
     def find_onsets(self, step: _Step, flags: int) -> list[tuple[float, int]]:
         """(time, candidate) of every contact onset inside the step: zero crossings and hidden impacts."""
@@ -319,10 +337,13 @@ class EventDrivenIntegrator:
                 raise _Failure("event chattering", f"t={t_event:.9g} s: {self.stalled} contact events without progress in time")
         else:
             self.stalled = 0
-        self.t, self.y = t_event, y_event
         # the restart begins on the contact surface: count the starting candidates as
-        # touching so the same onsets are not detected a second time
-        pen_e[starting] = np.maximum(pen_e[starting], np.finfo(float).tiny)
+        # touching so the same onsets are not detected a second time; at the instant of the
+        # previous restart, the candidates it started (marked touching, probed at exactly 0
+        # now) keep their mark, or two simultaneous onsets would start each other in turn
+        touching = starting if t_event > self.t else sorted(set(starting) | set(np.flatnonzero(self.pen > 0)))
+        pen_e[touching] = np.maximum(pen_e[touching], np.finfo(float).tiny)
+        self.t, self.y = t_event, y_event
         self.pen, self.rate = pen_e, rate_e
 
     def check_failures(self, step: _Step, flags: int) -> None:

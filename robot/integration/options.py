@@ -50,10 +50,18 @@ class FailureLimits:
     ``penetration_ratio``: a penetration above this fraction of the joint's
     clearance is unphysical for hard metal contact (the force would crush the
     parts); ``max_residual``: constraint drift (m or rad); ``min_step``: step-size
-    collapse; ``max_wall_time``: seconds (``inf``: none).
+    collapse; ``max_wall_time``: seconds (``inf``: none); ``max_steps``: accepted
+    steps, counting those still needed to reach the end at the pace of the last
+    ``STALL_WINDOW`` steps (a run creeping forward at 1e-10 s a step has not
+    collapsed below ``min_step`` but will never finish).
     """
 
     penetration_ratio: float = 0.5
     max_residual: float = 1e-4
     min_step: float = 1e-13
     max_wall_time: float = math.inf
+    max_steps: float = 1e8
+
+
+#: accepted steps over which the pace of a run is measured for ``FailureLimits.max_steps``
+STALL_WINDOW = 10_000

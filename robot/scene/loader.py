@@ -54,7 +54,8 @@ Schema (defaults in brackets)::
     [solver]   method ["RK45"], rtol [1e-7], atol [1e-9], max_step [1e-3], first_step,
                jacobian ["structured"] (implicit methods' Newton matrix; or "finite-difference")
     [baumgarte] alpha [5.0], beta [5.0]
-    [limits]   penetration_ratio [0.5], max_residual [1e-4], min_step [1e-13], max_wall_time
+    [limits]   penetration_ratio [0.5], max_residual [1e-4], min_step [1e-13], max_wall_time,
+               max_steps [1e8] (steps taken plus those the last 10,000 steps' pace needs)
 
     [materials.steel]  youngs_modulus, poisson_ratio
 
@@ -141,7 +142,7 @@ MAX_MISALIGNMENT_DEG = 5.0
 DEFAULT_OUTPUT_STEP = 2e-4
 _SOLVER_KEYS = {"method", "rtol", "atol", "max_step", "first_step", "jacobian"}
 _BAUMGARTE_KEYS = {"alpha", "beta"}
-_LIMIT_KEYS = {"penetration_ratio", "max_residual", "min_step", "max_wall_time"}
+_LIMIT_KEYS = {"penetration_ratio", "max_residual", "min_step", "max_wall_time", "max_steps"}
 _MATERIAL_KEYS = {"youngs_modulus", "poisson_ratio"}
 _FRICTION_KEYS = {"law", "static", "dynamic", "transition_velocity", "viscous", "reference_force", "coefficient", "regularisation_velocity"}
 _COORDINATE_KEYS = {"offset", "rate", "amplitudes", "harmonics", "phases"}
@@ -615,6 +616,7 @@ def _limits(table: dict, where: str) -> FailureLimits:
         _number(table, "max_residual", w, defaults.max_residual, low=0.0, low_open=True),
         _number(table, "min_step", w, defaults.min_step, low=0.0),
         _number(table, "max_wall_time", w, defaults.max_wall_time, low=0.0, low_open=True),
+        _number(table, "max_steps", w, defaults.max_steps, low=1.0),
     )
 
 
