@@ -43,6 +43,7 @@ import html as html_lib
 import math
 import re
 import time
+import uuid
 import warnings
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -655,11 +656,28 @@ def _set_view(vis, mechanism: Mechanism, q0: np.ndarray, sizes: Mapping[str, Ele
 # --------------------------------------------------------------------------- static HTML
 
 
+# fixed namespace of the UUIDs written to static pages (uuid5 of "<meshcat path>/<role>/<index>")
+_UUID_NAMESPACE = uuid.UUID("6f1d3c2a-5b8e-5d4f-9a7c-2e0b1c4d8f36")
+
+
 class _SceneRecorder:
     """Stands in for meshcat's ``ViewerWindow``: keeps the scene tree as meshcat's server does.
 
     ``meshcat.Visualizer(window=_SceneRecorder())`` then works offline (no
     server, no ports) and its ``static_html()`` returns one self-contained file.
+
+    Deterministic output: meshcat gives every scene element (geometry, material,
+    texture, image, object) a time-based ``uuid.uuid1()`` when the Python object
+    is created (``meshcat.geometry.SceneElement``), and ``set_object`` commands
+    carry those UUIDs, so two exports of the same result would differ byte for
+    byte. The recorder replaces them, as each ``set_object`` command is
+    recorded, by :meth:`_stable_uuids`: UUIDs derived from the node's path and
+    the element's role. This also covers elements made outside our code
+    (Pinocchio's visualizer, meshcat's shared default ``MeshPhongMaterial``
+    created at import time), which a patch at creation time would miss. The
+    replacement is one-to-one: an element shared by several objects keeps one
+    UUID, distinct elements keep distinct UUIDs; what is drawn is unchanged
+    (the live server path, :func:`serve_live`, keeps meshcat's UUIDs).
     """
 
     def __init__(self, caption: str = "", speed: float = 1.0, t_start: float = 0.0):
@@ -670,12 +688,58 @@ class _SceneRecorder:
         self.speed = speed
         self.t_start = t_start
         self.web_url = None
+        self._uuids: dict[str, str] = {}  # meshcat's uuid -> the one written
+        self._issued: set[str] = set()
+
+    def _stable_uuids(self, data: dict) -> None:
+        """Replace, in place, meshcat's UUIDs in a lowered ``set_object`` command by deterministic ones.
+
+        Elements defined in the command (dicts with a ``"uuid"``) are named
+        ``uuid5(_UUID_NAMESPACE, "<path>/<role>/<i>")``, role being the list they
+        are in (``geometries``, ``materials``, ``textures``, ``images``) or
+        ``object``; an element seen before (shared) keeps its first name. Then
+        every string equal to a replaced UUID (definitions and references such
+        as ``geometry``, ``material``, ``map``, ``image``) is rewritten.
+        """
+        path = str(data.get("path", ""))
+        counts: dict[str, int] = {}
+
+        def define(value, role: str) -> None:
+            if isinstance(value, dict):
+                own = value.get("uuid")
+                if isinstance(own, str) and own not in self._uuids:
+                    i = counts.get(role, 0)
+                    counts[role] = i + 1
+                    name = str(uuid.uuid5(_UUID_NAMESPACE, f"{path}/{role}/{i}"))
+                    while name in self._issued:  # a node set twice: keep the new elements distinct
+                        name = str(uuid.uuid5(_UUID_NAMESPACE, name))
+                    self._issued.add(name)
+                    self._uuids[own] = name
+                for key, item in value.items():
+                    define(item, key)
+            elif isinstance(value, list):
+                for item in value:
+                    define(item, role)
+
+        def rewrite(value):
+            if isinstance(value, dict):
+                return {key: rewrite(item) for key, item in value.items()}
+            if isinstance(value, list):
+                return [rewrite(item) for item in value]
+            if isinstance(value, str):
+                return self._uuids.get(value, value)
+            return value
+
+        define(data.get("object"), "object")
+        data["object"] = rewrite(data.get("object"))
 
     def send(self, command) -> None:
         import umsgpack
         from meshcat.servers.tree import SceneTree, find_node
 
         data = command.lower()
+        if data.get("type") == "set_object":
+            self._stable_uuids(data)
         path = [p for p in data["path"].split("/") if p]
         packed = umsgpack.packb(data)
         kind = data["type"]
