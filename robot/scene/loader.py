@@ -8,8 +8,11 @@ what it uses: the mechanism is loaded with exactly its clearance joints
 
 Shipped scenes live in ``robot/scene/scenes/*.toml`` and are found by name; any other
 path to a ``.toml`` file works too. ``extends = "NAME_OR_PATH"`` starts from
-another scene and overrides it table by table (arrays of tables such as
-``[[clearance]]`` are replaced whole). Unknown keys and bad values raise
+another scene and overrides it table by table, nested tables key by key (arrays
+of tables such as ``[[clearance]]`` are replaced whole, and so is a table that
+sets another ``function`` or ``mode``); the child inherits every key but
+``name``, and each relative path resolves against the folder of the file that
+wrote it. Unknown keys and bad values raise
 :class:`robot.errors.SceneError` naming the key, the value and what is valid.
 
 Schema (defaults in brackets)::
@@ -134,6 +137,9 @@ POSE_COORDINATES = ("x", "z", "roll", "pitch", "yaw")
 _TOP_KEYS = {"name", "description", "mechanism", "end_effector", "duration", "gravity", "trajectory", "solver", "baumgarte", "limits", "materials", "clearance", "initial", "output", "extends", "force", "actuators"}
 _OUTPUT_KEYS = {"step", "keep", "precision"}
 PRECISIONS = ("float64", "float32")
+#: keys that choose which other keys a table has (a time function's, an actuator's mode): with ``extends``,
+#: a child table setting one of them to another value replaces the parent's table instead of merging into it
+KIND_KEYS = ("function", "mode")
 #: prefix of a shipped mechanism file in a scene's ``mechanism`` key
 PACKAGE_PREFIX = "package://"
 #: the largest initial misalignment looked at (degrees); the admissible one is set by the clearances
@@ -270,29 +276,101 @@ def resolve_scene_path(name_or_path: str | Path) -> Path:
 
 
 def _read(path: Path, seen: tuple[Path, ...] = ()) -> dict:
+    """The document of scene file ``path`` with its ``extends`` chain merged in.
+
+    The file's own relative paths stay as written; ``"__dir__"`` holds the folder
+    they are relative to (``path.parent``; :func:`load_scene` pops it as the
+    scene's ``base_dir``). Inherited paths are already absolute
+    (:func:`_inherited`), so every path resolves against the file that wrote it.
+    """
     if path in seen:
         raise SceneError(f"scene {path.name}: 'extends' forms a cycle through {', '.join(p.name for p in seen)}")
     try:
         data = tomllib.loads(path.read_text(encoding="utf-8"))
-    except tomllib.TOMLDecodeError as exc:
+    except (tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:
         raise SceneError(f"scene {str(path)!r} is not valid TOML: {exc}") from None
     parent = data.pop("extends", None)
-    if parent is None:
-        data.setdefault("__dir__", str(path.parent))
-        return data
+    if parent is not None:
+        data = _merge(_inherited(parent, path, seen), data)
+    data["__dir__"] = str(path.parent)
+    return data
+
+
+def _inherited(parent: Any, path: Path, seen: tuple[Path, ...]) -> dict:
+    """What scene ``path`` inherits from ``extends = parent``: the parent's document, its paths absolute, without ``name``.
+
+    The parent's ``name`` is dropped: a child is named by its own ``name`` or its
+    file's stem, so that its results never overwrite the parent's.
+    """
     if not isinstance(parent, str):
         raise SceneError(f"scene {path.name}: extends={parent!r} must be a scene name or path", key="extends", value=parent)
     # a .toml parent is a path relative to this scene; anything else a shipped scene name
     parent_path = resolve_scene_path(path.parent / parent if parent.endswith(".toml") else parent)
-    merged = _read(parent_path, seen + (path,))
-    for key, value in data.items():
-        if isinstance(value, dict) and isinstance(merged.get(key), dict):
-            merged[key] = {**merged[key], **value}
+    document = _read(parent_path, seen + (path,))
+    document = _absolute_paths(document, Path(document.pop("__dir__")))
+    document.pop("name", None)
+    return document
+
+
+def _merge(parent: dict, child: dict) -> dict:
+    """``child`` over ``parent``: tables (nested ones too) key by key, any other value replaced whole.
+
+    Arrays of tables (``[[clearance]]``, ``[[force]]``) are lists, so a child that
+    writes one replaces the parent's whole array; a table that chooses another
+    kind (:data:`KIND_KEYS`) replaces the parent's table whole (docs/scenes.md, "extends").
+    """
+    merged = dict(parent)
+    for key, value in child.items():
+        if isinstance(value, dict) and isinstance(merged.get(key), dict) and not _changes_kind(merged[key], value):
+            merged[key] = _merge(merged[key], value)
         else:
             merged[key] = value
-    if "mechanism" in data:
-        merged["__dir__"] = str(path.parent)
     return merged
+
+
+def _changes_kind(parent: dict, child: dict) -> bool:
+    """Whether ``child`` sets a :data:`KIND_KEYS` key to another value than ``parent``'s.
+
+    The keys of one time function (or actuator mode) do not fit another, so such a
+    table is not merged: a child switching ``shoulder`` from a harmonic to a
+    constant torque must not inherit ``amplitude`` and ``frequency``.
+    """
+    return any(key in child and child[key] != parent.get(key) for key in KIND_KEYS)
+
+
+def _path_entries(document: dict) -> list[tuple[dict, str]]:
+    """The ``(table, key)`` pairs of a document whose value is a file path.
+
+    ``mechanism``, and the ``file`` of a tabulated time function: in a joint of
+    ``[trajectory]``, an entry of ``[actuators]`` or a ``[[force]]`` table.
+    """
+    entries = [(document, "mechanism")]
+    for section in ("trajectory", "actuators"):
+        table = document.get(section)
+        if isinstance(table, dict):
+            entries += [(entry, "file") for entry in table.values() if isinstance(entry, dict)]
+    forces = document.get("force")
+    if isinstance(forces, list):
+        entries += [(entry, "file") for entry in forces if isinstance(entry, dict)]
+    return entries
+
+
+def _absolute_paths(document: dict, folder: Path) -> dict:
+    """``document`` with its relative paths made absolute against ``folder``, the folder of the file that wrote them.
+
+    A ``mechanism`` that names a shipped file (a bare name with no such file in
+    ``folder``) becomes ``package://NAME``, so a file of that name beside a child
+    scene does not take its place. Values that are not paths are left for the
+    validation to refuse.
+    """
+    for table, key in _path_entries(document):
+        value = table.get(key)
+        if not isinstance(value, str) or not value or value.startswith(PACKAGE_PREFIX):
+            continue
+        local = folder / value
+        shipped = key == "mechanism" and not local.is_file() and Path(value).name == value
+        table[key] = PACKAGE_PREFIX + value if shipped else str(local)
+    return document
 
 
 def _unknown(table: dict, allowed: set[str], where: str) -> None:

@@ -6,8 +6,8 @@
   ``sum c_k t^k``), ``constant_rate`` (``offset``, ``rate``), ``harmonic``
   (``amplitude``, ``frequency`` Hz, ``phase`` rad [0], ``offset`` [0]) or
   ``tabulated`` (``time = [...]`` and ``value = [...]`` inline, or ``file =
-  "table.csv"``: two columns time, value, path relative to the scene file;
-  cubic spline).
+  "table.csv"``: two columns time, value, path relative to the scene file that
+  writes it; every row finite, times strictly increasing; cubic spline).
 * :func:`table_curve`: inline abscissae and ordinates (strictly increasing abscissae) -> a spline.
 * :func:`vector3`, :func:`number_list`.
 
@@ -61,18 +61,13 @@ def vector3(table: dict, key: str, where: str, default: tuple[float, float, floa
     return vector
 
 
-def table_curve(x: tuple[float, ...], y: tuple[float, ...], x_key: str, y_key: str, where: str, source: tuple[str, str] | None = None) -> TF.Tabulated:
-    """A spline through ``(x, y)``; refused with the offending entry if ``x`` is not strictly increasing.
-
-    ``source``: the scene key and value the table came from (a file), named in the error instead.
-    """
+def table_curve(x: tuple[float, ...], y: tuple[float, ...], x_key: str, y_key: str, where: str) -> TF.Tabulated:
+    """A spline through inline lists ``(x, y)``; refused with the offending entry if ``x`` is not strictly increasing."""
     if len(x) != len(y):
-        key, value = source or (y_key, list(y))
-        raise SceneError(f"{where}: {x_key} and {y_key} must have the same length (got {len(x)} and {len(y)})", key=key, value=value)
-    key, value = source or (x_key, list(x))
+        raise SceneError(f"{where}: {x_key} and {y_key} must have the same length (got {len(x)} and {len(y)})", key=y_key, value=list(y))
     bad = TF.first_non_increasing(x)
     if bad is not None:
-        raise SceneError(f"{where}: {x_key} must be strictly increasing; entry {bad} ({x[bad]!r}) follows {x[bad - 1]!r}", key=key, value=value)
+        raise SceneError(f"{where}: {x_key} must be strictly increasing; entry {bad} ({x[bad]!r}) follows {x[bad - 1]!r}", key=x_key, value=list(x))
     return TF.Tabulated(np.array(x), np.array(y))
 
 
@@ -80,18 +75,46 @@ def _tabulated(table: dict, where: str, base_dir: Path | None) -> TF.Tabulated:
     if "file" in table:
         if "time" in table or "value" in table:
             raise SceneError(f"{where}: give either file or time and value, not both", key="file", value=table["file"])
-        name = table["file"]
-        if not isinstance(name, str) or not name:
-            raise SceneError(f"{where}: file={name!r} must be the path of a CSV file (time, value)", key="file", value=name)
-        path = (base_dir or Path.cwd()) / name
-        try:
-            time, value = TF.read_table_csv(path)
-        except FileNotFoundError:
-            raise SceneError(f"{where}: file={name!r}: {str(path)!r} does not exist", key="file", value=name) from None
-        except (ValueError, UnicodeDecodeError) as exc:
-            raise SceneError(f"{where}: file={name!r} is not a two-column CSV table (time, value): {exc}", key="file", value=name) from None
-        return table_curve(tuple(map(float, time)), tuple(map(float, value)), f"file={name!r}: the time column", "value", where, ("file", name))
+        return _file_table(table["file"], where, base_dir)
     return table_curve(number_list(table, "time", where, min_length=2), number_list(table, "value", where, min_length=2), "time", "value", where)
+
+
+def _file_table(name: Any, where: str, base_dir: Path | None) -> TF.Tabulated:
+    """The spline of a CSV time table ``file = name`` (relative to ``base_dir``), its columns checked first."""
+    if not isinstance(name, str) or not name:
+        raise SceneError(f"{where}: file={name!r} must be the path of a CSV file (time, value)", key="file", value=name)
+    path = (base_dir or Path.cwd()) / name
+    try:
+        time, value = TF.read_table_csv(path)
+    except FileNotFoundError:
+        raise SceneError(f"{where}: file={name!r}: {str(path)!r} does not exist", key="file", value=name) from None
+    except OSError as exc:
+        raise SceneError(f"{where}: file={name!r}: {str(path)!r} cannot be read: {exc.strerror or exc}", key="file", value=name) from None
+    except (ValueError, UnicodeDecodeError) as exc:
+        raise SceneError(f"{where}: file={name!r} is not a two-column CSV table (time, value): {exc}", key="file", value=name) from None
+    time, value = [float(t) for t in time], [float(v) for v in value]
+    _check_file_columns(time, value, f"{where}: file={name!r}", f"in {str(path)!r}", name)
+    return TF.Tabulated(np.array(time), np.array(value))
+
+
+def _check_file_columns(time: list[float], value: list[float], where: str, source: str, name: str) -> None:
+    """A time table file's columns hold finite numbers and strictly increasing times, as the inline lists must.
+
+    scipy's spline would refuse them with a traceback. Entries count from 0 like
+    those of the inline lists (header and comment lines not counted); ``source``
+    says which file on disk, as a relative name may resolve anywhere.
+    """
+    for column, numbers in (("time", time), ("value", value)):
+        bad = next((i for i, x in enumerate(numbers) if not math.isfinite(x)), None)
+        if bad is not None:
+            raise SceneError(
+                f"{where}: the {column} column must hold finite numbers; entry {bad} (data row {time[bad]!r}, {value[bad]!r}) is {numbers[bad]!r}, {source}",
+                key="file",
+                value=name,
+            )
+    bad = TF.first_non_increasing(time)
+    if bad is not None:
+        raise SceneError(f"{where}: the time column must be strictly increasing; entry {bad} ({time[bad]!r}) follows {time[bad - 1]!r}, {source}", key="file", value=name)
 
 
 def time_function(table: Any, where: str, base_dir: Path | None, *, extra_keys: set[str] = frozenset(), default: str | None = None):
