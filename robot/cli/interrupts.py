@@ -38,9 +38,11 @@ class Phase(enum.Enum):
 
 
 def _integration_code():
-    from robot.integration.simulation import integrate
+    # the step loop's run() turns KeyboardInterrupt into an "interrupted" result: every engine's
+    # integration goes through it (the Lagrange model's integrate() and the Newton-Euler cross-check)
+    from robot.integration.event_loop import EventDrivenIntegrator
 
-    return integrate.__code__
+    return EventDrivenIntegrator.run.__code__
 
 
 def inside_integration(frame: FrameType | None) -> bool:

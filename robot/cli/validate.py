@@ -10,15 +10,26 @@ examples:
   clearance validate                                         # every default scene, both engines
   clearance validate --scenes ideal --engines newton_euler --no-figures
   clearance validate --scenes compound --duration compound=0.1 --out /tmp/validation
+
+--rtol, --atol, --max-step and --first-step take the ranges a scene's [solver]
+table allows (robot/scene/loader.py); --first-step may not exceed the largest
+step. A failed engine run does not stop the study: the command ends with exit
+status 1 and names each failed run, the time it reached and the cause. Ctrl-C or
+SIGTERM stops a Lagrange integration at once (a Newton-Euler or Exudyn run under
+way finishes first) and the study before its next run; what was computed is
+kept (validation.json, rewritten after every scene, and the figures), exit status 1.
 """
 
 from __future__ import annotations
 
 import argparse
+import importlib.util
 import math
+import sys
 from pathlib import Path
 
-from robot.cli.common import UsageError, writable_folder
+from robot.cli.common import EXIT_INTERRUPTED, EXIT_OK, EXIT_RUN_FAILED, UsageError, writable_folder
+from robot.cli.interrupts import Phase, clean_stops
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -28,9 +39,28 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def execute(args: argparse.Namespace) -> int:
-    """Check every scene, duration and number before the (long) study starts."""
-    from robot.scene.loader import load_scene
+    """Check every scene, duration and number before the (long) study starts; then run it, stoppable."""
     from robot.validation.study import run_validation
+
+    _check_options(args)
+    out = writable_folder(Path(args.out))
+    if "exudyn" in args.engines and importlib.util.find_spec("exudyn") is None:
+        raise UsageError("--engines exudyn: the exudyn package is not installed (pip install exudyn); or leave it out: --engines newton_euler")
+    with clean_stops(f"saving the finished runs to {out}") as stops:
+        stops.phase = Phase.RUNNING
+        results = run_validation(args, stop_reason=lambda: stops.received[0] if stops.received else None)
+    if results["success"]:
+        return EXIT_OK
+    if not results["scenes"]:
+        print(f"{stops.received[0]}: stopped before any engine run; nothing to save", file=sys.stderr)
+        return EXIT_INTERRUPTED
+    return EXIT_RUN_FAILED
+
+
+def _check_options(args: argparse.Namespace) -> None:
+    """``UsageError`` naming the first bad scene, ``--duration``, solver option or ``--exudyn-step`` (nothing run yet)."""
+    from robot.scene.loader import load_scene
+    from robot.validation.study import solver_from_options
 
     for scene in args.scenes:
         load_scene(scene)
@@ -42,9 +72,10 @@ def execute(args: argparse.Namespace) -> int:
             seconds = math.nan
         if scene not in args.scenes or not (math.isfinite(seconds) and seconds > 0):
             raise UsageError(f"--duration {item!r}: expected SCENE=SECONDS with SCENE one of --scenes and SECONDS > 0")
-    for option in ("rtol", "atol", "max_step", "first_step", "exudyn_step"):
-        value = getattr(args, option)
-        if value is not None and not (math.isfinite(value) and value > 0):
-            raise UsageError(f"--{option.replace('_', '-')}={value!r} must be a finite number > 0")
-    writable_folder(Path(args.out))
-    return run_validation(args)
+    try:
+        solver_from_options(args)
+    except ValueError as exc:
+        raise UsageError(str(exc)) from None
+    step = args.exudyn_step
+    if step is not None and not (math.isfinite(step) and step > 0):
+        raise UsageError(f"--exudyn-step={step!r} must be a finite number > 0")

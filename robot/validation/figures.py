@@ -21,6 +21,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
+from robot.io.atomic import atomic_write  # noqa: E402
 from robot.validation import comparison as CMP  # noqa: E402
 
 STYLE = {
@@ -90,10 +91,15 @@ def _overview(scene: str, series: dict, metrics: dict, out: Path) -> Path:
         ax.axis("off")
         ax.text(0.02, 0.5, _summary_text(metrics), family="monospace", fontsize=9, va="center")
     fig.suptitle(f"Validation, scene '{scene}' ({metrics['duration_s']} s)")
-    path = out / f"validation_{scene}.png"
-    fig.savefig(path, dpi=120)
-    plt.close(fig)
-    return path
+    return _save(fig, out / f"validation_{scene}.png")
+
+
+def _save(fig, path: Path) -> Path:
+    """Write ``fig`` to the PNG ``path`` atomically (a reader or a stop never meets half an image) and close it."""
+    try:
+        return atomic_write(path, lambda tmp: fig.savefig(tmp, format="png", dpi=120))
+    finally:
+        plt.close(fig)
 
 
 def _summary_text(metrics: dict) -> str:
@@ -130,7 +136,4 @@ def _deviations(scene: str, series: dict, metrics: dict, out: Path) -> Path:
     axes[0].set(ylabel="max |driving force - Lagrange| [N]", title="driving-force deviation from the Lagrange model")
     axes[1].set(ylabel="|end-effector position - Lagrange| [m]", title="end-effector deviation from the Lagrange model")
     fig.suptitle(f"Deviation from the Lagrange model, scene '{scene}' (Exudyn: Lagrange interpolated by cubic splines)")
-    path = out / f"deviation_{scene}.png"
-    fig.savefig(path, dpi=120)
-    plt.close(fig)
-    return path
+    return _save(fig, out / f"deviation_{scene}.png")

@@ -1,7 +1,8 @@
 """The validation study: each scene with the Lagrange model, Newton-Euler and Exudyn; JSON and figures.
 
-``python scripts/validate.py [--out DIR] [--scenes ...] [--duration SCENE=T ...]
-[--method M] [--rtol R] [--atol A] [--max-step H]`` calls :func:`main`. Defaults (:data:`DEFAULT_DURATIONS`): the ideal mechanism over
+``clearance validate [--out DIR] [--scenes ...] [--duration SCENE=T ...]
+[--method M] [--rtol R] [--atol A] [--max-step H]`` (= ``python scripts/validate.py``;
+:mod:`robot.cli.validate`) calls :func:`run_validation`. Defaults (:data:`DEFAULT_DURATIONS`): the ideal mechanism over
 one period of the reference motion (1 s), the clearance scenes over 0.5 s (the
 first impacts, the transient of the misaligned bearing and a few tens of
 impacts), which keeps the whole study to a few minutes on two cores.
@@ -25,13 +26,17 @@ import json
 import math
 import time
 from pathlib import Path
+from typing import Callable
 
 import numpy as np
 
+from robot.errors import SceneError
 from robot.integration.solvers import METHODS
+from robot.io.atomic import atomic_write_text
 from robot.model.platform_kinematics import platform_state
 from robot.run import build_run, run_scene
 from robot.integration.simulation import SolverOptions
+from robot.scene.loader import _solver as scene_solver_table
 from robot.validation import comparison as CMP
 from robot.validation import exudyn_model as EX
 from robot.validation import newton_euler as NE
@@ -44,6 +49,13 @@ EXUDYN_SETTINGS = {
     "clearance": EX.ExudynSettings(step_size=1e-5, spectral_radius=0.5, newton_relative_tolerance=1e-10, newton_absolute_tolerance=1e-12),
 }
 ENGINES = ("lagrange", "newton_euler", "exudyn")
+#: the options that change the validation solver (``--method``, ``--rtol``, ...), named as the [solver] keys
+SOLVER_OPTIONS = ("method", "rtol", "atol", "max_step", "first_step")
+
+
+def _no_stop() -> str | None:
+    """The ``stop_reason`` of a study nobody stops (the library's callers, the tests)."""
+    return None
 
 
 def exudyn_settings_for(run) -> EX.ExudynSettings:
@@ -111,20 +123,26 @@ def exudyn_series(run, settings: EX.ExudynSettings) -> CMP.EngineSeries:
     )
 
 
-def compare_scene(scene: str, duration: float, engines=ENGINES, progress=print, solver: SolverOptions = VALIDATION_SOLVER) -> tuple[dict, dict]:
+def compare_scene(
+    scene: str, duration: float, engines=ENGINES, progress=print, solver: SolverOptions = VALIDATION_SOLVER,
+    stop_reason: Callable[[], str | None] = _no_stop,
+) -> tuple[dict | None, dict]:
     """Run one scene with the engines; returns (metrics for the JSON, series for the figures).
 
     ``scene``: a shipped scene name or a scene file. The Lagrange and Newton-Euler runs
     both use ``solver`` (default :data:`VALIDATION_SOLVER`), whatever the scene's
     ``[solver]`` says; ``metrics["validation_solver"]`` and ``metrics["scene_solver"]``
-    record both.
+    record both. ``stop_reason()``: why the study must stop (``"SIGINT"``, ...) or
+    ``None``; asked before every engine run, so that a stop skips the runs not yet
+    started but keeps the finished ones (``metrics["engines_not_run"]`` lists the
+    skipped engines). Stopped before the first run: ``(None, {})``.
     """
     check_solver(solver, newton_euler="newton_euler" in engines)
     built = build_run(scene, duration=duration)
     run = with_solver(built, solver)
-    progress(f"[{scene}] Lagrange ({duration} s, {solver.method} rtol {solver.rtol:g} atol {solver.atol:g} max_step {solver.max_step:g} s)")
-    lagrange = lagrange_series(run)
-    series = {"lagrange": lagrange}
+    if stop_reason():
+        return None, {}
+    series, not_run = _run_engines(scene, run, engines, progress, stop_reason)
     metrics: dict = {
         "duration_s": duration,
         "sites": _sites(run),
@@ -132,46 +150,71 @@ def compare_scene(scene: str, duration: float, engines=ENGINES, progress=print, 
         "scene_solver": dataclasses.asdict(built.scene.solver),
         "engines": {},
     }
-    if "newton_euler" in engines:
-        progress(f"[{scene}] Newton-Euler")
-        ne_records, ne_at_lagrange = newton_euler_series(run, lagrange.t)
-        series["newton_euler"] = ne_records
-        series["newton_euler@lagrange"] = ne_at_lagrange
-    if "exudyn" in engines:
-        settings = exudyn_settings_for(run)
-        progress(f"[{scene}] Exudyn (h = {settings.step_size} s)")
-        series["exudyn"] = exudyn_series(run, settings)
-        metrics["exudyn_settings"] = settings.__dict__.copy()
+    if "exudyn" in series:
+        metrics["exudyn_settings"] = exudyn_settings_for(run).__dict__.copy()
+    if not_run:
+        metrics["engines_not_run"] = not_run
     for s in series.values():
         s.ee_ideal = ideal_positions(run, s.t)
+    lagrange = series["lagrange"]
     window_end = lagrange.first_onset  # inf for the ideal mechanism: whole run
     stats_ref = CMP.statistics(lagrange, duration)
     for name in series:
-        if name.endswith("@lagrange"):
-            continue
-        s = series[name]
-        entry = {
-            "success": s.success,
-            "message": s.message,
-            "solver": s.solver,
-            "wall_time_s": s.wall_time,
-            "integration_wall_time_s": s.integration_time,
-            "n_records": int(len(s.t)),
-            "statistics": CMP.statistics(s, duration),
-        }
-        if name != "lagrange":
-            entry["statistics_relative_to_lagrange"] = CMP.compare_statistics(entry["statistics"], stats_ref)
-            if name == "newton_euler":
-                sampled = series["newton_euler@lagrange"]
-                entry["pointwise_before_first_impact"] = CMP.pointwise_on_reference_times(sampled, lagrange, window_end)
-                entry["pointwise_whole_run"] = CMP.pointwise_on_reference_times(sampled, lagrange, math.inf)
-                entry["separation_time_1um_s"] = CMP.separation_time(sampled, lagrange, same_times=True)
-            else:
-                entry["pointwise_before_first_impact"] = CMP.pointwise_interpolated(s, lagrange, window_end)
-                entry["separation_time_1um_s"] = CMP.separation_time(s, lagrange, same_times=False)
-        metrics["engines"][name] = entry
+        if not name.endswith("@lagrange"):
+            metrics["engines"][name] = _engine_metrics(name, series, duration, stats_ref, window_end)
     metrics["first_impact_s"] = None if not math.isfinite(window_end) else window_end
     return metrics, series
+
+
+def _run_engines(scene: str, run, engines, progress, stop_reason: Callable[[], str | None]) -> tuple[dict, list[str]]:
+    """The engines' series, the Lagrange model first, and the engines not run because a stop was asked for.
+
+    The engines after the Lagrange model are compared with its records, so it
+    always runs; each other engine starts only if no stop is pending.
+    """
+    solver, duration = run.scene.solver, run.scene.duration
+    progress(f"[{scene}] Lagrange ({duration} s, {solver.method} rtol {solver.rtol:g} atol {solver.atol:g} max_step {solver.max_step:g} s)")
+    lagrange = lagrange_series(run)
+    series = {"lagrange": lagrange}
+    others = [name for name in ENGINES[1:] if name in engines]
+    for index, name in enumerate(others):
+        if stop_reason():
+            return series, others[index:]
+        if name == "newton_euler":
+            progress(f"[{scene}] Newton-Euler")
+            series["newton_euler"], series["newton_euler@lagrange"] = newton_euler_series(run, lagrange.t)
+        else:
+            settings = exudyn_settings_for(run)
+            progress(f"[{scene}] Exudyn (h = {settings.step_size} s)")
+            series["exudyn"] = exudyn_series(run, settings)
+    return series, []
+
+
+def _engine_metrics(name: str, series: dict, duration: float, stats_ref: dict, window_end: float) -> dict:
+    """One engine's entry of ``metrics["engines"]``: its outcome, cost, statistics and deviations from the Lagrange model."""
+    s, lagrange = series[name], series["lagrange"]
+    entry = {
+        "success": s.success,
+        "message": s.message,
+        "t_last_record_s": float(s.t[-1]) if len(s.t) else 0.0,
+        "solver": s.solver,
+        "wall_time_s": s.wall_time,
+        "integration_wall_time_s": s.integration_time,
+        "n_records": int(len(s.t)),
+        "statistics": CMP.statistics(s, duration),
+    }
+    if name == "lagrange":
+        return entry
+    entry["statistics_relative_to_lagrange"] = CMP.compare_statistics(entry["statistics"], stats_ref)
+    if name == "newton_euler":
+        sampled = series["newton_euler@lagrange"]
+        entry["pointwise_before_first_impact"] = CMP.pointwise_on_reference_times(sampled, lagrange, window_end)
+        entry["pointwise_whole_run"] = CMP.pointwise_on_reference_times(sampled, lagrange, math.inf)
+        entry["separation_time_1um_s"] = CMP.separation_time(sampled, lagrange, same_times=True)
+    else:
+        entry["pointwise_before_first_impact"] = CMP.pointwise_interpolated(s, lagrange, window_end)
+        entry["separation_time_1um_s"] = CMP.separation_time(s, lagrange, same_times=False)
+    return entry
 
 
 def summary_table(results: dict) -> str:
@@ -193,7 +236,34 @@ def summary_table(results: dict) -> str:
                 line += f"  EE rms dev {st['rms_ee_deviation_from_ideal_m']:.3g} m"
             if e.get("separation_time_1um_s") is not None:
                 line += f"  separates (1 um) at {e['separation_time_1um_s']:.4f} s"
+            if not e["success"]:
+                line += f"  FAILED: {e['message']}"
             lines.append(line)
+        if m.get("engines_not_run"):
+            lines.append(f"  not run: {', '.join(m['engines_not_run'])}")
+    return "\n".join(lines)
+
+
+def failure_report(results: dict, path: Path) -> str:
+    """What went wrong, for the console: each failed engine run with its time and cause, and a stop with what it skipped.
+
+    Empty when the study succeeded. The comparison table above it is then of
+    partial runs, so the report says so and where the partial results are.
+    """
+    if results.get("success", True):
+        return ""
+    failed, stop = results.get("failed_runs", []), results.get("interrupted")
+    problems = ([f"{len(failed)} engine run(s) failed"] if failed else []) + ([f"stopped by {stop['cause']}"] if stop else [])
+    figures = " and the figures" if any(m.get("figures") for m in results["scenes"].values()) else ""
+    lines = [f"validation incomplete: {', '.join(problems)}; what was computed is in {path}{figures}"]
+    for run in failed:
+        duration = results["scenes"][run["scene"]]["duration_s"]
+        lines.append(
+            f"  {run['scene']}: the {run['engine']} run failed ({duration:g} s asked, last record at t = {run['t_last_record_s']:.6g} s): {run['message']}"
+        )
+    if stop:
+        skipped = "; ".join(f"{scene}: {', '.join(engines)}" for scene, engines in stop["not_run"].items())
+        lines.append(f"  {stop['cause']}: not run: {skipped}" if skipped else f"  {stop['cause']} came during the last run, which was left to finish: no run was skipped")
     return "\n".join(lines)
 
 
@@ -225,10 +295,49 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def main(argv=None) -> int:
-    return run_validation(parse_args(argv))
+    """Run the study of ``argv`` (``clearance validate`` is the command line); 0 if every run succeeded, else 1."""
+    args = parse_args(argv)
+    try:
+        solver_from_options(args)
+    except ValueError as exc:
+        raise SystemExit(f"validate: {exc}") from None
+    return 0 if run_validation(args)["success"] else 1
 
 
-def run_validation(args: argparse.Namespace) -> int:
+def solver_from_options(args: argparse.Namespace) -> SolverOptions:
+    """The validation solver with ``--method/--rtol/--atol/--max-step/--first-step`` applied, checked before any run.
+
+    The options get the ranges of a scene's ``[solver]`` table (checked by the
+    scene loader's own code, so the two cannot drift apart), ``--first-step`` may
+    not exceed the largest step, and the method must suit the engines
+    (:func:`robot.validation.settings.check_solver`). ``ValueError`` names the
+    option, its value and the valid range.
+    """
+    given = {name: getattr(args, name) for name in SOLVER_OPTIONS if getattr(args, name) is not None}
+    try:
+        scene_solver_table(given, "validation solver")
+    except SceneError as exc:
+        raise ValueError(_option_message(exc)) from None
+    max_step = given.get("max_step", VALIDATION_SOLVER.max_step)
+    first_step = given.get("first_step")
+    if first_step is not None and first_step > max_step:
+        raise ValueError(f"--first-step={first_step!r} is out of range (0, {max_step:g}]: the first step cannot exceed the largest step (--max-step {max_step:g} s)")
+    return validation_solver(**given, newton_euler="newton_euler" in args.engines)
+
+
+def _option_message(exc: SceneError) -> str:
+    """The scene loader's message about a ``[solver]`` key, worded for the command-line option of that name."""
+    key = str(exc.key)
+    option = "--" + key.replace("_", "-")
+    detail = str(exc).split(": ", 1)[-1]  # the loader prefixes where the key is
+    if not detail.startswith(f"{key}="):
+        return f"{option}: {detail}"
+    scene_range = f" (the range of a scene's [solver] {key})" if "out of range" in detail else ""
+    return f"{option}{detail[len(key):]}{scene_range}"
+
+
+def scene_durations(args: argparse.Namespace) -> dict[str, float]:
+    """Each scene's simulated time: :data:`DEFAULT_DURATIONS`, ``--duration SCENE=T`` overriding, 0.5 s for other scenes."""
     durations = dict(DEFAULT_DURATIONS)
     for item in args.duration:
         scene, _, value = item.partition("=")
@@ -236,12 +345,24 @@ def run_validation(args: argparse.Namespace) -> int:
             durations[scene] = float(value)
         except ValueError:
             raise SystemExit(f"--duration {item!r}: expected SCENE=SECONDS") from None
+    return {scene: durations.get(scene, 0.5) for scene in args.scenes}
+
+
+def run_validation(args: argparse.Namespace, stop_reason: Callable[[], str | None] = _no_stop) -> dict:
+    """Run the study of ``args`` (options checked: :func:`solver_from_options`); returns what validation.json holds.
+
+    Nothing computed is lost: after every scene, validation.json is rewritten
+    (atomically) and the scene's figures drawn, failed runs included (their
+    records up to the failure). A failed engine run does not stop the study: the
+    other engines and scenes still say something. ``stop_reason()`` (the command
+    line's signal handling) stops it before the next engine run; the runs skipped
+    are listed under ``interrupted``. ``results["success"]``: every run reached
+    its end and nothing was skipped.
+    """
+    durations = scene_durations(args)
     if args.exudyn_step is not None:
         EXUDYN_SETTINGS["clearance"] = dataclasses.replace(EXUDYN_SETTINGS["clearance"], step_size=args.exudyn_step)
-    try:
-        solver = validation_solver(args.method, args.rtol, args.atol, args.max_step, args.first_step, newton_euler="newton_euler" in args.engines)
-    except ValueError as exc:
-        raise SystemExit(f"scripts/validate.py: {exc}") from None
+    solver = solver_from_options(args)
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     results = {
@@ -249,21 +370,50 @@ def run_validation(args: argparse.Namespace) -> int:
         "validation_solver": dataclasses.asdict(solver),
         "scenes": {},
     }
+    not_run: dict[str, list[str]] = {}
     started = time.perf_counter()
     for scene in args.scenes:
-        duration = durations.get(scene, 0.5)
-        metrics, series = compare_scene(scene, duration, ("lagrange", *args.engines), solver=solver)
+        metrics, series = (None, {}) if stop_reason() else compare_scene(
+            scene, durations[scene], ("lagrange", *args.engines), solver=solver, stop_reason=stop_reason
+        )
+        if metrics is None:
+            not_run[scene] = ["lagrange", *args.engines]
+            continue
         results["scenes"][scene] = metrics
+        if metrics.get("engines_not_run"):
+            not_run[scene] = list(metrics["engines_not_run"])
         if not args.no_figures:
             from robot.validation.figures import scene_figures
 
             metrics["figures"] = [p.name for p in scene_figures(scene, series, metrics, out)]
-        (out / "validation.json").write_text(json.dumps(_clean(results), indent=2))
+        write_results(results, out, not_run, stop_reason())
     results["total_wall_time_s"] = time.perf_counter() - started
-    (out / "validation.json").write_text(json.dumps(_clean(results), indent=2))
+    if not results["scenes"]:  # stopped before the first run: no file to write (an older one stays as it was)
+        return study_outcome(results, not_run, stop_reason())
+    path = write_results(results, out, not_run, stop_reason())
     print(summary_table(results))
-    print(f"wrote {out / 'validation.json'}")
-    return 0
+    report = failure_report(results, path)
+    print(report or f"wrote {path}")
+    return results
+
+
+def study_outcome(results: dict, not_run: dict[str, list[str]], stop: str | None) -> dict:
+    """Record in ``results`` whether the study succeeded, which engine runs failed and what a stop skipped."""
+    results["failed_runs"] = [
+        {"scene": scene, "engine": name, "t_last_record_s": entry["t_last_record_s"], "message": entry["message"]}
+        for scene, metrics in results["scenes"].items()
+        for name, entry in metrics["engines"].items()
+        if not entry["success"]
+    ]
+    results["interrupted"] = {"cause": stop, "not_run": not_run} if stop else None
+    results["success"] = not results["failed_runs"] and not stop and not not_run
+    return results
+
+
+def write_results(results: dict, out: Path, not_run: dict[str, list[str]], stop: str | None) -> Path:
+    """Write OUT/validation.json atomically (a reader never sees half a file; a stop mid-write keeps the last one)."""
+    study_outcome(results, not_run, stop)
+    return atomic_write_text(out / "validation.json", json.dumps(_clean(results), indent=2))
 
 
 def _clean(value):
