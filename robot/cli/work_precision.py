@@ -19,6 +19,13 @@ Writes to DIR (default results/work_precision/SCENE):
 * ``stability_stiffness.png``, ``stability_baumgarte.png``,
   ``stability_hidden_contacts.png``: the failure maps.
 
+Ctrl-C or SIGTERM stops the study after the benchmark: the run in progress
+stops, and ``work_precision.json`` keeps every run finished so far, marked
+``incomplete`` (the step stopped in, the cause, the simulated time the stopped
+run reached, when); exit status 1. A stop during the benchmark ends the command
+with nothing written (130). A reference run that fails stops the study the same
+way.
+
 The logic lives in ``robot/analysis/studies``; ``docs/work-precision.md`` reports.
 """
 
@@ -28,14 +35,20 @@ import argparse
 import json
 import math
 import platform
+import sys
 import time
+from functools import partial
 from pathlib import Path
+from typing import Callable
 
 import numpy as np
 import scipy
 
 from robot.io.atomic import atomic_write_text
-from robot.cli.common import EXIT_OK, UsageError, number_list, positive_int, positive_number, positive_seconds, writable_folder
+from robot.cli.common import (
+    EXIT_INTERRUPTED, EXIT_OK, EXIT_RUN_FAILED, UsageError, number_list, positive_int, positive_number, positive_seconds, writable_folder,
+)
+from robot.cli.interrupts import Phase, clean_stops
 from robot.integration.solvers import JACOBIAN_METHODS, METHODS
 from robot.run import build_run
 from robot.integration.simulation import SolverOptions
@@ -99,13 +112,26 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--output-step", type=positive_number, default=1e-4, help="common output grid for pointwise errors (s)")
 
 
+#: the report's keys each step writes ("a/b": key b of a); a step that starts drops those of an earlier
+#: report, so that a stopped step never leaves its finished runs mixed with an earlier invocation's
+STEP_KEYS = {
+    "sweep": ("t_end", "output_step", "reference", "runs", "cheapest_accurate", "sweep_max_step"),
+    "stability: stiffness": ("stability/stiffness",),
+    "stability: hidden contacts": ("stability/hidden_contacts",),
+    "stability: Baumgarte gains": ("stability/baumgarte",),
+    "realtime": ("realtime", "realtime_factor", "rhs_us_in_run", "realtime_candidates"),
+    "long horizon": ("long_horizon",),
+}
+
+
 class _Phases:
     """One invocation's state: the run, the report being written, the output folder, the log."""
 
-    def __init__(self, args: argparse.Namespace, run, out: Path):
-        self.args, self.run, self.out = args, run, out
+    def __init__(self, args: argparse.Namespace, run, out: Path, stop: Callable[[], bool] | None = None):
+        self.args, self.run, self.out, self.stop = args, run, out, stop
         self.started = time.perf_counter()
         self.json_path = out / "work_precision.json"
+        self.step = "right-hand side benchmark"  # what runs now (named in the report of a stopped study)
         # phases can be run separately (--skip-*): what this invocation computes replaces the
         # same keys of an existing report of the scene, the rest is kept
         self.report: dict = json.loads(self.json_path.read_text()) if self.json_path.is_file() else {}
@@ -115,6 +141,15 @@ class _Phases:
 
     def save(self) -> None:
         atomic_write_text(self.json_path, json.dumps(_clean(self.report), indent=1, default=_json_default))
+
+    def begin(self, step: str) -> None:
+        """Start ``step``: named in the report if the study stops in it; an earlier report's keys of it dropped."""
+        self.step = step
+        for path in STEP_KEYS.get(step, ()):
+            parent, _, key = path.rpartition("/")
+            container = self.report.get(parent) if parent else self.report
+            if isinstance(container, dict):
+                container.pop(key, None)
 
     def header(self) -> None:
         solver = self.run.scene.solver
@@ -146,16 +181,27 @@ class _Phases:
             report["rhs_us_all_joints_in_contact"] = bench["all joints in contact"]["fast"]["median_us"]
         for key, value in bench.items():
             say(f"  {key}: {value['fast']['median_us']:.1f} us (reference implementation {value['reference']['median_us']:.1f} us)")
-        self.save()
+
+    def studies(self, methods: list[str], candidates: list[SolverOptions]) -> None:
+        """Every step the options ask for, after the benchmark (each saves the report when done)."""
+        args, run = self.args, self.run
+        if not args.skip_sweep:
+            self.sweep(methods)
+        if not args.skip_stability and run.dynamics.contacts:
+            self.contact_stability()
+        if not args.skip_stability:
+            self.baumgarte_stability()
+        if args.realtime_t_end > 0:
+            self.realtime(candidates)
+            if args.long_horizon:
+                self.long_horizon(candidates)
 
     def sweep(self, methods: list[str]) -> None:
         args, report, say = self.args, self.report, self.say
+        self.begin("sweep")
         report["t_end"] = args.t_end
         report["output_step"] = args.output_step
-        say(f"reference solutions over [0, {args.t_end}] s")
-        ref = wp.reference(self.run, args.t_end, args.output_step)
-        report["reference"] = ref.summary()
-        say(f"  comparable window [0, {ref.window:.4g}] s; check vs reference: {ref.agreement}")
+        ref = self.sweep_reference()
         tolerances = args.tolerances or (wp.TOLERANCES if not args.quick else (1e-4, 1e-6, 1e-8))
         steps = wp.STEP_SIZES if not args.quick else {k: v[:2] for k, v in wp.STEP_SIZES.items()}
         if args.steps:
@@ -170,27 +216,55 @@ class _Phases:
                 f"steps {row['steps']:7d} rhs {row['rhs_calls']:8d} ee {e['ee']:.2e} peak {e['peak_force']:.2e} energy {e['energy']:.2e}"
             )
 
-        rows = wp.run_sweep(self.run, ref, cases, args.t_end, args.output_step, progress)
+        try:
+            rows = wp.run_sweep(self.run, ref, cases, args.t_end, args.output_step, progress, stop=self.stop)
+        except wp.StudyStopped as stopped:
+            self.sweep_rows(stopped.finished, finished=False)
+            raise
+        self.sweep_rows(rows)
+        self.save()
+
+    def sweep_reference(self) -> wp.Reference:
+        """The sweep's reference and check runs (those that finished are kept if the study stops in them)."""
+        args = self.args
+        self.say(f"reference solutions over [0, {args.t_end}] s")
+        self.step = "sweep (its reference solutions)"
+        try:
+            ref = wp.reference(self.run, args.t_end, args.output_step, stop=self.stop)
+        except wp.StudyStopped as stopped:
+            if stopped.finished:
+                self.report["reference"] = stopped.finished
+            raise
+        self.report["reference"] = ref.summary()
+        self.step = "sweep"
+        self.say(f"  comparable window [0, {ref.window:.4g}] s; check vs reference: {ref.agreement}")
+        return ref
+
+    def sweep_rows(self, rows: list[dict], finished: bool = True) -> None:
+        """The runs of the sweep (all, or those done before a stop), the cheapest accurate one, the figure."""
+        report = self.report
         report["runs"] = rows
         best = wp.cheapest_accurate(rows)
         report["cheapest_accurate"] = best and {k: best[k] for k in ("label", "options", "cpu_time", "steps", "rhs_calls", "errors")}
-        wp.plot(rows, report["reference"], args.t_end, self.out / "work_precision.png", f"Work-precision, scene {self.run.scene.name}")
-        say(f"cheapest at engineering accuracy: {best and best['label']}")
-        self.save()
+        if rows:
+            wp.plot(rows, report["reference"], self.args.t_end, self.out / "work_precision.png", f"Work-precision, scene {self.run.scene.name}")
+        self.say(f"cheapest at engineering accuracy{'' if finished else ' (of the runs done)'}: {best and best['label']}")
 
     def contact_stability(self) -> None:
         args, run, say = self.args, self.run, self.say
+        stability_report = self.report.setdefault("stability", {})
+        self.begin("stability: stiffness")
         say("stability: step size against contact stiffness")
-        if args.quick:
-            stiff = stability.stiffness_map(args.scene, scales=(0.1, 1.0, 10.0), steps=(5e-5, 1e-5, 2e-6), t_end=0.015, progress=say)
-        else:
-            stiff = stability.stiffness_map(args.scene, progress=say)
+        options = dict(scales=(0.1, 1.0, 10.0), steps=(5e-5, 1e-5, 2e-6), t_end=0.015) if args.quick else {}
+        stiff = self.keep_partial(stability_report, "stiffness", partial(stability.stiffness_map, args.scene, progress=say, stop=self.stop, **options))
         stability.plot_stiffness(stiff, self.out / "stability_stiffness.png")
+        self.begin("stability: hidden contacts")
         say("stability: hidden contact onsets")
         hidden_t = 0.1 if not args.quick else 0.03
         # peaks and onsets of a tight run over the same horizon (DOP853, rtol 1e-10)
-        tight = simulate(run, wp.CHECK, hidden_t, label="hidden-contact reference")
-        hidden = stability.hidden_contact_map(
+        tight = wp.run_or_stop(partial(simulate, run, wp.CHECK, hidden_t, label="hidden-contact reference"), "hidden-contact reference", stop=self.stop)
+        hidden_map = partial(
+            stability.hidden_contact_map,
             run,
             methods=("RK23", "RK45", "DOP853", "LSODA", "BDF") if not args.quick else ("RK45", "LSODA"),
             tolerances=(1e-2, 1e-3, 1e-4, 1e-5, 1e-6) if not args.quick else (1e-2, 1e-4),
@@ -198,65 +272,122 @@ class _Phases:
             reference_peaks=tight.peaks,
             reference_onsets=tight.n_events,
             progress=say,
+            stop=self.stop,
         )
+        hidden = self.keep_partial(stability_report, "hidden_contacts", hidden_map)
         stability.plot_hidden(hidden, self.out / "stability_hidden_contacts.png")
-        self.report.setdefault("stability", {})["stiffness"] = stiff
-        self.report["stability"]["hidden_contacts"] = hidden
         self.save()
 
+    def keep_partial(self, where: dict, key: str, study: Callable[[], dict]) -> dict:
+        """``where[key] = study()``; a stopped study's partial map is stored there too before the stop goes on."""
+        try:
+            where[key] = study()
+        except wp.StudyStopped as stopped:
+            where[key] = stopped.finished
+            raise
+        return where[key]
+
     def baumgarte_stability(self) -> None:
+        self.begin("stability: Baumgarte gains")
         self.say("stability: Baumgarte gains (ideal mechanism)")
         if self.args.quick:
-            gains = stability.baumgarte_map(
-                alphas=(0.0, 5.0, 100.0), betas=(0.0, 5.0, 100.0), cases=(("RK45", 1e-6, None), ("RK4", None, 2e-3)), t_end=0.3, progress=self.say
-            )
+            options = dict(alphas=(0.0, 5.0, 100.0), betas=(0.0, 5.0, 100.0), cases=(("RK45", 1e-6, None), ("RK4", None, 2e-3)), t_end=0.3)
         else:
             grid = (0.0, 1.0, 5.0, 20.0, 100.0, 1000.0)
-            gains = stability.baumgarte_map(alphas=grid, betas=grid, t_end=0.5, progress=self.say)
+            options = dict(alphas=grid, betas=grid, t_end=0.5)
+        study = partial(stability.baumgarte_map, progress=self.say, stop=self.stop, **options)
+        gains = self.keep_partial(self.report.setdefault("stability", {}), "baumgarte", study)
         stability.plot_baumgarte(gains, self.out / "stability_baumgarte.png")
-        self.report.setdefault("stability", {})["baumgarte"] = gains
         self.save()
 
     def realtime(self, candidates: list[SolverOptions]) -> None:
-        args, run, report, say = self.args, self.run, self.report, self.say
+        args, run, say = self.args, self.run, self.say
+        self.begin("realtime")
         say(f"real-time run: the scene's solver over [0, {args.realtime_t_end}] s")
         # first a short run that compiles what the run needs (numba kernels compiled on first use
         # in a process, the contact laws' Jacobian kernels when not yet in numba's disk cache)
-        warm_up = speed.realtime(run, run.scene.solver, min(0.05, args.realtime_t_end))
+        warm_up = self.timed(run.scene.solver, min(0.05, args.realtime_t_end), "warm-up", None)
         say(f"  warm-up over {warm_up['t_reached']:.3g} s: {warm_up['wall_time']:.1f} s wall")
         # repeated: the machine is shared and noisy; the median run is reported, every factor kept
-        repeats = [speed.realtime(run, run.scene.solver, args.realtime_t_end) for _ in range(max(1, args.realtime_repeats))]
+        repeats: list[dict] = []
+        try:
+            for i in range(max(1, args.realtime_repeats)):
+                repeats.append(self.timed(run.scene.solver, args.realtime_t_end, f"real-time run {i + 1}", repeats))
+        finally:  # a stop keeps the repeats done (their median)
+            if repeats:
+                self.realtime_median(repeats)
+        self.realtime_candidates(candidates)
+        self.save()
+
+    def realtime_candidates(self, candidates: list[SolverOptions]) -> None:
+        timed: list[dict] = []
+        self.report["realtime_candidates"] = timed  # filled as the candidates run
+        for options in candidates:
+            other = self.timed(options, self.args.realtime_t_end, _label(options), timed)
+            timed.append(other)
+            self.say(
+                f"  {_label(options)}: factor {other['realtime_factor']:.2f} ({other['rhs_calls']} rhs, {other['status'] == 0 and 'ok' or other['cause']})"
+            )
+
+    def timed(self, options: SolverOptions, t_end: float, label: str, finished) -> dict:
+        """:func:`speed.realtime` of ``options`` over ``t_end``, stoppable (``finished``: what a stop keeps)."""
+        return wp.run_or_stop(partial(speed.realtime, self.run, options, t_end), label, finished, self.stop)
+
+    def realtime_median(self, repeats: list[dict]) -> None:
         real = sorted(repeats, key=lambda r: r["realtime_factor"])[len(repeats) // 2]
         real["realtime_factors_of_repeats"] = [r["realtime_factor"] for r in repeats]
-        report["realtime"] = real
-        report["realtime_factor"] = real["realtime_factor"]
-        report["rhs_us_in_run"] = real["rhs_us_in_run"]
-        say(
+        self.report["realtime"] = real
+        self.report["realtime_factor"] = real["realtime_factor"]
+        self.report["rhs_us_in_run"] = real["rhs_us_in_run"]
+        self.say(
             f"  wall {real['wall_time']:.1f} s for {real['t_reached']:.3g} s simulated: factor {real['realtime_factor']:.2f} "
             f"(median of {real['realtime_factors_of_repeats']}), {real['rhs_us_in_run']:.1f} us per rhs in the run"
         )
-        timed = []
-        for options in candidates:
-            other = speed.realtime(run, options, args.realtime_t_end)
-            timed.append(other)
-            say(f"  {_label(options)}: factor {other['realtime_factor']:.2f} ({other['rhs_calls']} rhs, {other['status'] == 0 and 'ok' or other['cause']})")
-        report["realtime_candidates"] = timed
-        self.save()
 
     def long_horizon(self, candidates: list[SolverOptions]) -> None:
         t_end, run = self.args.realtime_t_end, self.run
+        self.begin("long horizon")
         self.say(f"long horizon: statistics over [0, {t_end}] s against DOP853 rtol 1e-10")
-        tight = simulate(run, SolverOptions("DOP853", rtol=1e-10, atol=1e-12, max_step=1e-3), t_end, label="DOP853 rtol 1e-10")
-        rows = {}
+        label = "DOP853 rtol 1e-10"
+        tight = wp.run_or_stop(partial(simulate, run, SolverOptions("DOP853", rtol=1e-10, atol=1e-12, max_step=1e-3), t_end, label=label), label, stop=self.stop)
+        rows: dict = {}
+        self.report["long_horizon"] = {"t_end": t_end, "tight": tight.counts(), "runs": rows}  # filled as the runs end
         for options in [run.scene.solver] + candidates:
-            outcome = simulate(run, options, t_end, label=_label(options))
+            outcome = wp.run_or_stop(partial(simulate, run, options, t_end, label=_label(options)), _label(options), rows, self.stop)
             row = outcome.counts()
             row["peak_force_relative_to_tight"] = {j: outcome.peaks[j] / tight.peaks[j] - 1.0 for j in tight.peaks}
             row["impulse_relative_to_tight"] = {j: outcome.impulses[j] / tight.impulses[j] - 1.0 for j in tight.impulses}
             rows[outcome.label] = row
             self.say(f"  {outcome.label}: energy {outcome.energy_error:.2e} J, drift {outcome.max_residual:.2e}, impulses {row['impulse_relative_to_tight']}")
-        self.report["long_horizon"] = {"t_end": t_end, "tight": tight.counts(), "runs": rows}
         self.save()
+
+    def finish(self) -> int:
+        """Save the whole report (no longer ``incomplete``)."""
+        self.report.pop("incomplete", None)
+        self.save()
+        self.say(f"wrote {self.json_path}")
+        return EXIT_OK
+
+    def stopped(self, stopped: wp.StudyStopped, signals: list[str]) -> int:
+        """Save what finished, marked ``incomplete`` (step, cause, time); say where; exit status 1."""
+        cause = stopped.cause
+        if cause == wp.INTERRUPTED:
+            cause = f"interrupted by the user ({signals[0]})" if signals else "interrupted by the user"
+        self.report["incomplete"] = {
+            "step": self.step,
+            "cause": cause,
+            "message": str(stopped),
+            "stopped_run": stopped.stopped_run,  # its counts (label, t_reached, ...), None if stopped between runs
+            "elapsed_s": time.perf_counter() - self.started,
+            "at": time.strftime("%Y-%m-%dT%H:%M:%S%z"),
+        }
+        self.save()
+        print(
+            f"work-precision stopped in step '{self.step}' after {self.report['incomplete']['elapsed_s']:.1f} s: {stopped}; "
+            f"the runs finished so far are saved in {self.json_path} (marked incomplete)",
+            file=sys.stderr,
+        )
+        return EXIT_RUN_FAILED
 
 
 def _checked_methods(args: argparse.Namespace) -> list[str]:
@@ -272,23 +403,26 @@ def _checked_methods(args: argparse.Namespace) -> list[str]:
 def execute(args: argparse.Namespace) -> int:
     methods = _checked_methods(args)
     candidates = _candidates(args.candidates)  # checked before any run
-    run = build_run(args.scene)
-    phases = _Phases(args, run, writable_folder(args.out or Path("results") / "work_precision" / run.scene.file_stem))
-    phases.header()
-    phases.rhs_benchmark()
-    if not args.skip_sweep:
-        phases.sweep(methods)
-    if not args.skip_stability and run.dynamics.contacts:
-        phases.contact_stability()
-    if not args.skip_stability:
-        phases.baumgarte_stability()
-    if args.realtime_t_end > 0:
-        phases.realtime(candidates)
-        if args.long_horizon:
-            phases.long_horizon(candidates)
-    phases.save()
-    phases.say(f"wrote {phases.json_path}")
-    return EXIT_OK
+    with clean_stops() as stops:
+        run = build_run(args.scene)  # a stop before the benchmark has ended: exit 130, nothing written
+        out = writable_folder(args.out or Path("results") / "work_precision" / run.scene.file_stem)
+        phases = _Phases(args, run, out, stop=lambda: stops.requested)
+        stops.saving = f"saving the finished runs to {phases.json_path}"
+        phases.header()
+        phases.rhs_benchmark()
+        if stops.requested:  # stopped in the benchmark's sample run: its numbers are not kept
+            print(f"{stops.received[0]}: stopped during the right-hand side benchmark; nothing written", file=sys.stderr)
+            return EXIT_INTERRUPTED
+        stops.phase = Phase.SAVING
+        phases.save()
+        stops.phase = Phase.RUNNING
+        try:
+            phases.studies(methods, candidates)
+        except wp.StudyStopped as stopped:
+            stops.phase = Phase.SAVING
+            return phases.stopped(stopped, stops.received)
+        stops.phase = Phase.SAVING
+        return phases.finish()
 
 
 def _candidates(text: str) -> list[SolverOptions]:

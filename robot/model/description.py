@@ -17,10 +17,21 @@ yourdfpy ignore unknown elements)::
 
 Actuated joints are the joints named in standard ``<transmission>`` elements, in
 file order. This module only parses and validates; it builds no model.
+
+Masses and inertias are checked here (Pinocchio and urdfdom take any number, NaN
+included, and a run would fail later in the solver): an ``<inertial>`` element
+needs a finite mass > 0 and a finite, positive semi-definite inertia (zero for a
+point mass, one zero moment for a thin rod) whose moments satisfy the triangle
+inequalities (Ixx + Iyy >= Izz and permutations, in the
+given axes and in the principal axes). A link without ``<inertial>`` is massless,
+which URDF allows (a ground or world link, a frame link fixed to another); but a
+movable joint must carry some mass: if no link of its subtree has an
+``<inertial>``, the mass matrix is singular and the file is refused.
 """
 
 from __future__ import annotations
 
+import math
 import xml.etree.ElementTree as ET
 from dataclasses import dataclass
 from pathlib import Path
@@ -32,6 +43,19 @@ from robot.errors import MechanismFileError
 CLOSURE_TYPES = ("spherical", "revolute")
 #: URDF kinds of tree joints that can carry clearance -> the kind of clearance site they make
 CLEARANCE_TREE_KINDS = {"revolute": "revolute", "continuous": "revolute", "prismatic": "prismatic"}
+#: URDF kinds of joints that move their child (a "fixed" joint merges it into its parent)
+MOVABLE_KINDS = ("revolute", "continuous", "prismatic", "floating", "planar")
+#: the six components of a URDF ``<inertia>`` element (kg m^2)
+INERTIA_COMPONENTS = ("ixx", "ixy", "ixz", "iyy", "iyz", "izz")
+#: slack of the triangle inequalities, relative to the trace (moments rounded to a few digits, e.g. a thin plate's)
+TRIANGLE_SLACK = 1e-3
+#: a principal moment below -this x the largest is negative beyond rounding (a point mass or a thin rod has zeros)
+NEGATIVE_MOMENT_RATIO = 1e-9
+#: the valid range of an inertia, for the messages
+INERTIA_RANGE = (
+    "valid: a positive semi-definite matrix (zero for a point mass) whose moments satisfy the triangle "
+    "inequalities Ixx + Iyy >= Izz, Iyy + Izz >= Ixx, Izz + Ixx >= Iyy"
+)
 
 
 @dataclass(frozen=True)
@@ -124,6 +148,127 @@ def _links(root: ET.Element, label: str) -> list[str]:
     return links
 
 
+def _number(text: str | None) -> float:
+    """``float(text)``; NaN for a missing or non-numeric text (refused by the checks as not finite)."""
+    try:
+        return float(text) if text is not None else math.nan
+    except ValueError:
+        return math.nan
+
+
+def _check_mass(inertial: ET.Element, link: str, where: str) -> None:
+    element = inertial.find("mass")
+    text = element.get("value") if element is not None else None
+    if text is None:
+        raise MechanismFileError(
+            f"{where}: <inertial> has no <mass value=...>; give the mass in kg (a finite number > 0), "
+            "or leave out the whole <inertial> element of a massless link (a frame)", key=f"{link}.mass",
+        )
+    value = _number(text)
+    if not (math.isfinite(value) and value > 0.0):
+        raise MechanismFileError(
+            f"{where}: mass={text!r} is outside the valid range: a finite number > 0 (kg); "
+            "a massless link (a frame) has no <inertial> element at all", key=f"{link}.mass", value=text,
+        )
+
+
+def _inertia_values(inertial: ET.Element, link: str, where: str) -> dict[str, float]:
+    """The six components of an ``<inertial>``'s ``<inertia>`` (each present and finite)."""
+    element = inertial.find("inertia")
+    if element is None:
+        raise MechanismFileError(f"{where}: <inertial> has no <inertia ixx=... ixy=... ixz=... iyy=... iyz=... izz=...> (kg m^2)", key=f"{link}.inertia")
+    values = {}
+    for name in INERTIA_COMPONENTS:
+        text = element.get(name)
+        values[name] = _number(text)
+        if not math.isfinite(values[name]):
+            what = f"{name}={text!r} must be" if text is not None else f"attribute {name} is missing; it must be"
+            raise MechanismFileError(f"{where}: <inertia> {what} a finite number (kg m^2)", key=f"{link}.inertia.{name}", value=text)
+    return values
+
+
+def _triangle_violation(moments) -> str | None:
+    """The first of I1 + I2 >= I3 (and permutations) that ``moments`` break beyond the rounding slack, as text."""
+    slack = TRIANGLE_SLACK * float(np.sum(moments))
+    for i, j, k in ((0, 1, 2), (1, 2, 0), (2, 0, 1)):
+        if moments[i] + moments[j] < moments[k] - slack:
+            return f"{moments[i]:.6g} + {moments[j]:.6g} < {moments[k]:.6g}"
+    return None
+
+
+def _check_inertia(inertial: ET.Element, link: str, where: str) -> None:
+    values = _inertia_values(inertial, link, where)
+    given = ", ".join(f"{name}={value:g}" for name, value in values.items())
+    matrix = np.array([
+        [values["ixx"], values["ixy"], values["ixz"]],
+        [values["ixy"], values["iyy"], values["iyz"]],
+        [values["ixz"], values["iyz"], values["izz"]],
+    ])  # fmt: skip
+    principal = np.linalg.eigvalsh(matrix)  # ascending
+    if principal[0] < -NEGATIVE_MOMENT_RATIO * max(principal[-1], 0.0):
+        moments = ", ".join(f"{m:.6g}" for m in principal)
+        raise MechanismFileError(
+            f"{where}: inertia ({given}) has a negative principal moment ({moments} kg m^2); {INERTIA_RANGE}",
+            key=f"{link}.inertia", value=given,
+        )
+    # the given axes first (the numbers of the file); the principal axes catch what products of inertia hide
+    for axes, moments in (("", np.diag(matrix)), ("principal moments: ", principal)):
+        broken = _triangle_violation(moments)
+        if broken is not None:
+            raise MechanismFileError(
+                f"{where}: inertia ({given}) breaks the triangle inequality ({axes}{broken} kg m^2); {INERTIA_RANGE}",
+                key=f"{link}.inertia", value=given,
+            )
+
+
+def _massive_links(root: ET.Element, label: str) -> set[str]:
+    """The links with an ``<inertial>`` element, each checked (mass, inertia, origin)."""
+    massive = set()
+    for element in root.findall("link"):
+        inertial = element.find("inertial")
+        if inertial is None:
+            continue
+        name = element.get("name", "")
+        where = f"{label}: link {name!r}"
+        _check_mass(inertial, name, where)
+        _check_inertia(inertial, name, where)
+        origin = inertial.find("origin")
+        if origin is not None:
+            _vector(origin, "xyz", f"{where} <inertial><origin>")
+            _vector(origin, "rpy", f"{where} <inertial><origin>")
+        massive.add(name)
+    return massive
+
+
+def _subtree_links(link: str, children: dict[str, list[str]]) -> list[str]:
+    """``link`` and every link below it in the tree of joints (each once, whatever loops the file has)."""
+    found, stack = [], [link]
+    while stack:
+        current = stack.pop()
+        if current not in found:
+            found.append(current)
+            stack.extend(children.get(current, ()))
+    return found
+
+
+def _check_moving_bodies_have_mass(joints: dict[str, JointDeclaration], massive: set[str], label: str) -> None:
+    """Refuse a movable joint whose subtree has no ``<inertial>``: zero mass and inertia, a singular mass matrix."""
+    children: dict[str, list[str]] = {}
+    for joint in joints.values():
+        children.setdefault(joint.parent, []).append(joint.child)
+    for joint in joints.values():
+        if joint.kind not in MOVABLE_KINDS:
+            continue
+        carried = _subtree_links(joint.child, children)
+        if not massive.intersection(carried):
+            raise MechanismFileError(
+                f"{label}: joint {joint.name!r} ({joint.kind}) moves link(s) {', '.join(carried)}, none of which has an "
+                "<inertial> element: the body it moves has zero mass and zero inertia, so the mass matrix is singular; "
+                "give one of them an <inertial> (mass > 0) or make the joint fixed",
+                key=joint.name, value=tuple(carried),
+            )
+
+
 def _limits(element: ET.Element, name: str, kind: str, label: str) -> tuple[float | None, float | None]:
     limit = element.find("limit")
     if limit is None or kind not in ("prismatic", "revolute"):
@@ -207,8 +352,9 @@ def parse_mechanism(source: str | Path, *, is_text: bool = False) -> MechanismDe
 
     Raises :class:`MechanismFileError` for unreadable XML, a missing ``<robot>``
     root, duplicate names, closures naming missing links, unknown closure types,
-    a revolute closure without a non-zero axis, or a transmission naming a
-    missing joint.
+    a revolute closure without a non-zero axis, a transmission naming a
+    missing joint, a mass or inertia out of range (module docstring) or a
+    movable joint that carries no mass.
     """
     text, path = _read_text(source, is_text)
     label = str(path) if path else "<urdf text>"
@@ -220,6 +366,7 @@ def parse_mechanism(source: str | Path, *, is_text: bool = False) -> MechanismDe
         raise MechanismFileError(f"{label}: root element is <{root.tag}>, a URDF needs <robot>")
     links = _links(root, label)
     joints = _joints(root, set(links), label)
+    _check_moving_bodies_have_mass(joints, _massive_links(root, label), label)
     return MechanismDescription(
         path=path,
         name=root.get("name", "robot"),

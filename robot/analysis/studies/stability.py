@@ -18,14 +18,19 @@ reports them):
    back to the onset (relative to the clearance), failures.
 
 Every run goes through :func:`robot.integration.simulation.integrate`, which never raises on
-divergence: the maps record ``status`` and ``cause``.
+divergence: the maps record ``status`` and ``cause``. A map stopped by the user
+(Ctrl-C, or ``stop()`` true between runs) raises
+:class:`robot.analysis.studies.work_precision.StudyStopped` carrying the map
+filled so far.
 """
 
 from __future__ import annotations
 
 import dataclasses
 import math
+from functools import partial
 from pathlib import Path
+from typing import Callable
 
 import numpy as np
 
@@ -33,6 +38,7 @@ from robot.dynamics.equations import Baumgarte
 from robot.run import Run, build_run
 from robot.integration.simulation import SolverOptions
 from robot.analysis.studies.common import scene_variant, simulate
+from robot.analysis.studies.work_precision import run_or_stop, save_png
 
 OK = "ok"
 
@@ -56,41 +62,55 @@ def stiffness_map(
     adaptive_rtol: float = 1e-6,
     folder: Path | None = None,
     progress=None,
+    stop: Callable[[], bool] | None = None,
 ) -> dict:
     """Outcome of every (method, h, stiffness scale) run, and the adaptive method's mean step per scale."""
     base = build_run(scene)
     # the shipped scenes' clearance joints are all of [materials.steel]: scale its Young's modulus
     modulus = _steel_modulus(base)
     out = {"scene": scene, "t_end": t_end, "scales": list(scales), "steps": list(steps), "methods": {}, "adaptive": {}}
-    for scale in scales:
-        run = scene_variant(
-            scene,
-            f"[materials.steel]\nyoungs_modulus = {modulus * scale!r}\npoisson_ratio = {_steel_poisson(base)!r}\n",
-            folder,
-            name=f"{scene}_stiffness_{scale:g}",
-        )
-        for method in methods:
-            rows = out["methods"].setdefault(method, [])
-            for h in steps:
-                outcome = simulate(run, SolverOptions(method, rtol=1e-8, atol=1e-10, first_step=h), t_end, outputs=False)
-                rows.append({"scale": scale, "h": h, "result": _cause(outcome), "message": outcome.message, "cpu_time": outcome.cpu_time, "steps": outcome.n_steps})
-                if progress:
-                    progress(f"stiffness x{scale:g} {method} h={h:g}: {_cause(outcome)}")
-        outcome = simulate(run, SolverOptions(adaptive, rtol=adaptive_rtol, atol=adaptive_rtol * 1e-2, max_step=1e-3), t_end, outputs=False)
-        out["adaptive"][repr(scale)] = {
-            "method": adaptive,
-            "rtol": adaptive_rtol,
-            "result": _cause(outcome),
-            "steps": outcome.n_steps,
-            "mean_step": outcome.t_reached / max(outcome.n_steps, 1),
-            "cpu_time": outcome.cpu_time,
+    try:
+        for scale in scales:
+            run = scene_variant(
+                scene,
+                f"[materials.steel]\nyoungs_modulus = {modulus * scale!r}\npoisson_ratio = {_steel_poisson(base)!r}\n",
+                folder,
+                name=f"{scene}_stiffness_{scale:g}",
+            )
+            _fixed_step_runs(out, run, scale, methods, steps, t_end, progress, stop)
+            _adaptive_run(out, run, scale, adaptive, adaptive_rtol, t_end, progress, stop)
+    finally:  # a stopped map keeps the boundaries of what it ran
+        out["boundary"] = {
+            method: {repr(scale): _largest_ok([r for r in rows if r["scale"] == scale]) for scale in scales} for method, rows in out["methods"].items()
         }
-        if progress:
-            progress(f"stiffness x{scale:g} {adaptive}: {outcome.n_steps} steps")
-    out["boundary"] = {
-        method: {repr(scale): _largest_ok([r for r in rows if r["scale"] == scale]) for scale in scales} for method, rows in out["methods"].items()
-    }
     return out
+
+
+def _fixed_step_runs(out: dict, run: Run, scale: float, methods, steps, t_end: float, progress, stop) -> None:
+    for method in methods:
+        rows = out["methods"].setdefault(method, [])
+        for h in steps:
+            label = f"stiffness x{scale:g} {method} h={h:g}"
+            options = SolverOptions(method, rtol=1e-8, atol=1e-10, first_step=h)
+            outcome = run_or_stop(partial(simulate, run, options, t_end, outputs=False), label, out, stop)
+            rows.append({"scale": scale, "h": h, "result": _cause(outcome), "message": outcome.message, "cpu_time": outcome.cpu_time, "steps": outcome.n_steps})
+            if progress:
+                progress(f"{label}: {_cause(outcome)}")
+
+
+def _adaptive_run(out: dict, run: Run, scale: float, adaptive: str, adaptive_rtol: float, t_end: float, progress, stop) -> None:
+    options = SolverOptions(adaptive, rtol=adaptive_rtol, atol=adaptive_rtol * 1e-2, max_step=1e-3)
+    outcome = run_or_stop(partial(simulate, run, options, t_end, outputs=False), f"stiffness x{scale:g} {adaptive}", out, stop)
+    out["adaptive"][repr(scale)] = {
+        "method": adaptive,
+        "rtol": adaptive_rtol,
+        "result": _cause(outcome),
+        "steps": outcome.n_steps,
+        "mean_step": outcome.t_reached / max(outcome.n_steps, 1),
+        "cpu_time": outcome.cpu_time,
+    }
+    if progress:
+        progress(f"stiffness x{scale:g} {adaptive}: {outcome.n_steps} steps")
 
 
 def _largest_ok(rows) -> float | None:
@@ -125,18 +145,21 @@ def baumgarte_map(
     max_residual: float = 1e-4,
     max_wall_time: float = 20.0,
     progress=None,
+    stop: Callable[[], bool] | None = None,
 ) -> dict:
-    """Max drift, cost and outcome for every (alpha, beta) and solver case."""
+    """Max drift, cost and outcome for every (alpha, beta) and solver case (a case's grid fills as it runs)."""
     run = build_run(scene)
     limits = dataclasses.replace(run.scene.limits, max_residual=max_residual, max_wall_time=max_wall_time)
     out = {"scene": scene, "t_end": t_end, "alphas": list(alphas), "betas": list(betas), "max_residual_limit": max_residual, "cases": []}
     for method, rtol, h in cases:
         options = SolverOptions(method, rtol=rtol or 1e-8, atol=(rtol or 1e-8) * 1e-2, max_step=1e-2, first_step=h)
-        grid = []
+        grid: list[dict] = []
+        out["cases"].append({"method": method, "rtol": rtol, "h": h, "grid": grid})
         for alpha in alphas:
             for beta in betas:
                 dynamics = dataclasses.replace(run.dynamics, baumgarte=Baumgarte(alpha, beta))
-                outcome = simulate(run, options, t_end, dynamics=dynamics, limits=limits)
+                label = f"baumgarte {method} rtol={rtol} h={h} alpha={alpha:g} beta={beta:g}"
+                outcome = run_or_stop(partial(simulate, run, options, t_end, dynamics=dynamics, limits=limits), label, out, stop)
                 drift = outcome.max_residual
                 grid.append(
                     {
@@ -152,8 +175,7 @@ def baumgarte_map(
                     }
                 )
                 if progress:
-                    progress(f"baumgarte {method} rtol={rtol} h={h} alpha={alpha:g} beta={beta:g}: {_cause(outcome)} drift {drift:.2e}")
-        out["cases"].append({"method": method, "rtol": rtol, "h": h, "grid": grid})
+                    progress(f"{label}: {_cause(outcome)} drift {drift:.2e}")
     return out
 
 
@@ -171,6 +193,7 @@ def hidden_contact_map(
     reference_peaks: dict | None = None,
     reference_onsets: int | None = None,
     progress=None,
+    stop: Callable[[], bool] | None = None,
 ) -> dict:
     """Onsets, guard detections, overshoot and outcome per (method, tolerance, guard)."""
     clearance = min(_clearances(run))
@@ -179,7 +202,8 @@ def hidden_contact_map(
         for tol in tolerances:
             for guard in (True, False):
                 options = SolverOptions(method, rtol=tol, atol=tol * 1e-2, max_step=max_step, hidden_contacts=guard)
-                outcome = simulate(run, options, t_end, outputs=reference_peaks is not None)
+                label = f"hidden {method} rtol={tol:g} guard={guard}"
+                outcome = run_or_stop(partial(simulate, run, options, t_end, outputs=reference_peaks is not None), label, out, stop)
                 row = {
                     "method": method,
                     "rtol": tol,
@@ -197,7 +221,7 @@ def hidden_contact_map(
                 out["runs"].append(row)
                 if progress:
                     progress(
-                        f"hidden {method} rtol={tol:g} guard={guard}: {row['result']}, onsets {row['onsets']}, "
+                        f"{label}: {row['result']}, onsets {row['onsets']}, "
                         f"guard found {row['hidden_found']}, overshoot {row['overshoot_over_clearance']:.2g} c"
                     )
     return out
@@ -265,8 +289,7 @@ def plot_stiffness(data: dict, path) -> None:
     fig.legend(handles, labels, loc="lower center", ncol=len(labels), fontsize=8)
     fig.suptitle(f"Step size against contact stiffness ({data['scene']}); line: largest step that succeeded", fontsize=10)
     fig.tight_layout(rect=(0, 0.07, 1, 0.95))
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
+    save_png(fig, path)
 
 
 def plot_baumgarte(data: dict, path) -> None:
@@ -303,8 +326,7 @@ def plot_baumgarte(data: dict, path) -> None:
         f"labels: failure cause (drift limit {data['max_residual_limit']:g} m)",
         fontsize=10,
     )
-    fig.savefig(path, dpi=110, bbox_inches="tight")
-    plt.close(fig)
+    save_png(fig, path, bbox_inches="tight")
 
 
 def _short(cause: str) -> str:
@@ -359,5 +381,4 @@ def plot_hidden(data: dict, path) -> None:
         fontsize=10,
     )
     fig.tight_layout(rect=(0, 0, 1, 0.94))
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
+    save_png(fig, path)

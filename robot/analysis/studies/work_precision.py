@@ -26,6 +26,14 @@ Sweep
     methods over step sizes; CPU time (``time.process_time`` of the integration
     only), steps, rejected steps (-1: the method does not tell), right-hand-side
     calls, events.
+
+Stops
+    Ctrl-C (or SIGTERM, through ``robot.cli.interrupts``) stops the run in
+    progress with cause ``interrupted``; the study then raises
+    :class:`StudyStopped` carrying what it finished (:func:`run_or_stop`, which
+    the stability maps use too), so that the caller can save it. A reference
+    run that fails stops the study the same way (nothing can be measured
+    without it).
 """
 
 from __future__ import annotations
@@ -33,10 +41,13 @@ from __future__ import annotations
 import math
 import textwrap
 from dataclasses import dataclass, field, replace
+from functools import partial
+from typing import Callable, TypeVar
 
 import numpy as np
 
 from robot.integration import methods as registry
+from robot.io.atomic import atomic_write
 from robot.integration.methods import FIXED_STEP_METHODS, METHODS
 from robot.run import Run
 from robot.integration.simulation import SolverOptions
@@ -53,6 +64,44 @@ EE_TARGET = 1e-6
 PEAK_TARGET = 1e-2
 #: engineering accuracy: constraint drift (max |Phi|, m)
 DRIFT_TARGET = 1e-6
+#: the cause of a run stopped by Ctrl-C or SIGTERM (robot.integration.event_loop)
+INTERRUPTED = "interrupted"
+
+Result = TypeVar("Result")
+
+
+class StudyStopped(RuntimeError):
+    """A study that stopped before its end: the user stopped it, or a run it depends on failed.
+
+    ``finished``: what the study completed (its rows, or its map filled so far),
+    for the caller to save; ``stopped_run``: the counts of the run it stopped in
+    (``None`` when it stopped between runs); ``cause``: ``"interrupted"`` or
+    why a needed run failed.
+    """
+
+    def __init__(self, message: str, finished=None, stopped_run: dict | None = None, cause: str = INTERRUPTED):
+        super().__init__(message)
+        self.finished, self.stopped_run, self.cause = finished, stopped_run, cause
+
+
+def run_or_stop(simulate_run: Callable[[], Result], label: str, finished=None, stop: Callable[[], bool] | None = None) -> Result:
+    """``simulate_run()`` (an :class:`Outcome` or a dict of counts), unless the user stops the study.
+
+    Raises :class:`StudyStopped` with ``finished`` when ``stop()`` is true before
+    the run (a stop asked for between runs), when the run was interrupted (cause
+    ``interrupted``) or when it let a ``KeyboardInterrupt`` through.
+    """
+    if stop is not None and stop():
+        raise StudyStopped(f"stopped before {label}", finished)
+    try:
+        result = simulate_run()
+    except KeyboardInterrupt:
+        raise StudyStopped(f"{label}: interrupted by the user", finished) from None
+    counts = result.counts() if isinstance(result, Outcome) else result
+    if counts.get("cause") == INTERRUPTED:
+        message = counts.get("message") or f"t={counts.get('t_reached', math.nan):.9g} s: interrupted by the user"
+        raise StudyStopped(f"{label}: {message}", finished, counts)
+    return result
 
 
 @dataclass
@@ -85,12 +134,15 @@ def comparable_window(a: Outcome, b: Outcome, tolerance: float) -> float:
     return float(a.grid_t[over[0] - 1]) if over[0] > 0 else 0.0
 
 
-def reference(run: Run, t_end: float, output_step: float, window_tolerance: float = 1e-8) -> Reference:
-    options = dict(output_step=output_step)
-    ref = simulate(run, replace(REFERENCE, **options), t_end, label="reference DOP853 rtol 1e-11")
-    check = simulate(run, replace(CHECK, **options), t_end, label="check DOP853 rtol 1e-10")
+def reference(run: Run, t_end: float, output_step: float, window_tolerance: float = 1e-8, stop: Callable[[], bool] | None = None) -> Reference:
+    """The reference and its check run; :class:`StudyStopped` if either is stopped or fails (``finished``: the runs done)."""
+    labels = ("reference DOP853 rtol 1e-11", "check DOP853 rtol 1e-10")
+    ref = run_or_stop(partial(simulate, run, replace(REFERENCE, output_step=output_step), t_end, label=labels[0]), labels[0], stop=stop)
+    done = {"reference": ref.counts()}
+    check = run_or_stop(partial(simulate, run, replace(CHECK, output_step=output_step), t_end, label=labels[1]), labels[1], done, stop)
     if not (ref.success and check.success):
-        raise RuntimeError(f"reference runs failed: {ref.message}; {check.message}")
+        done["check"] = check.counts()
+        raise StudyStopped(f"reference runs failed: {ref.message}; {check.message}", done, cause="reference failed")
     window = comparable_window(ref, check, window_tolerance)
     reference = Reference(ref, check, window, window_tolerance)
     reference.agreement = errors(check, reference)
@@ -147,10 +199,11 @@ def sweep_cases(methods=None, tolerances=TOLERANCES, step_sizes=None, max_step: 
     return cases
 
 
-def run_sweep(run: Run, ref: Reference, cases, t_end: float, output_step: float, progress=None) -> list[dict]:
-    rows = []
+def run_sweep(run: Run, ref: Reference, cases, t_end: float, output_step: float, progress=None, stop: Callable[[], bool] | None = None) -> list[dict]:
+    """One row per case; :class:`StudyStopped` with the rows finished if the user stops the sweep."""
+    rows: list[dict] = []
     for label, options in cases:
-        outcome = simulate(run, replace(options, output_step=output_step), t_end, label=label)
+        outcome = run_or_stop(partial(simulate, run, replace(options, output_step=output_step), t_end, label=label), label, rows, stop)
         row = outcome.counts()
         row["errors"] = errors(outcome, ref)
         rows.append(row)
@@ -163,6 +216,16 @@ def cheapest_accurate(rows: list[dict]) -> dict | None:
     """The run of least CPU time that meets the engineering accuracy."""
     good = [r for r in rows if r["status"] == 0 and r["errors"].get("engineering_accuracy")]
     return min(good, key=lambda r: r["cpu_time"]) if good else None
+
+
+def save_png(fig, path, **options) -> None:
+    """Write ``fig`` as a PNG (110 dpi) to ``path`` atomically (a reader never sees half a file), then close it."""
+    import matplotlib.pyplot as plt
+
+    try:
+        atomic_write(path, lambda tmp: fig.savefig(tmp, format="png", dpi=110, **options))
+    finally:
+        plt.close(fig)
 
 
 def plot(rows: list[dict], ref: dict, t_end: float, path, title: str) -> None:
@@ -222,5 +285,4 @@ def plot(rows: list[dict], ref: dict, t_end: float, path, title: str) -> None:
     )
     fig.suptitle(title + "\n" + "\n".join(textwrap.wrap(note, 150)), fontsize=9)
     fig.tight_layout(rect=(0, 0, 1, 0.92))
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
+    save_png(fig, path)
