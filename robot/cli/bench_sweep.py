@@ -5,6 +5,7 @@ examples:
   clearance bench-sweep --runs 32 --t-end 0.2 --out /tmp/bench_sweep.json
 
 The definitions of the numbers: robot/sweep/bench.py; the figures measured: docs/studies.md.
+The output file is checked writable before the benchmark runs.
 """
 
 from __future__ import annotations
@@ -13,7 +14,7 @@ import argparse
 import json
 from pathlib import Path
 
-from robot.cli.common import EXIT_OK, positive_int, positive_seconds
+from robot.cli.common import EXIT_OK, positive_int, positive_seconds, writable_file
 
 HELP = "benchmark of the sweep engine: runs per minute, parallel efficiency, overhead"
 
@@ -27,5 +28,6 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 def execute(args: argparse.Namespace) -> int:
     from robot.sweep.bench import benchmark
 
-    print(json.dumps(benchmark(args.runs, args.t_end, args.out), indent=2))
+    out = writable_file(args.out, "--out")  # checked before the benchmark runs (exit 2)
+    print(json.dumps(benchmark(args.runs, args.t_end, out), indent=2))
     return EXIT_OK

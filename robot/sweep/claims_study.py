@@ -15,6 +15,11 @@ table is ``OUT/claims_study.json`` (one entry per parameter set: the overrides,
 each claim's verdict and numbers) and ``OUT/claims_study.md``.
 
     python -m robot.sweep.claims_study robot/sweep/examples/claims_*.toml --out out/claims_study --workers 2
+
+Exit codes: 0 the table is written; 1 interrupted (Ctrl-C) with runs saved (the
+same command resumes); 2 bad input (a sweep file, ``--workers``, an output
+folder that cannot be written), reported before any run; 130 interrupted before
+any run was saved.
 """
 
 from __future__ import annotations
@@ -23,15 +28,21 @@ import argparse
 import hashlib
 import json
 import sys
+import tempfile
 from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Callable, Sequence
 
 from robot.analysis.claims import ALIGNED, IDEAL, MISALIGNED, claims_json, evaluate_claims
+from robot.errors import RobotError
 from robot.io.atomic import atomic_write_text
+from robot.sweep.errors import SweepError
 
 CLEARANCE_SCENES = (ALIGNED, MISALIGNED)
+#: the cause of a run stopped by Ctrl-C (robot.integration.event_loop)
+INTERRUPTED = "interrupted"
+EXIT_OK, EXIT_INTERRUPTED_WITH_RUNS, EXIT_BAD_INPUT, EXIT_INTERRUPTED = 0, 1, 2, 130
 
 
 @dataclass(frozen=True)
@@ -46,7 +57,6 @@ class ParameterSet:
 def parameter_sets(sweep_files: Sequence[str | Path]) -> list[ParameterSet]:
     """Every design point of the sweep files (base scene ``compound``), in file order, duplicates dropped."""
     from robot.sweep.spec import load_sweep
-    from robot.sweep.errors import SweepError
 
     out, seen = [], set()
     for path in sweep_files:
@@ -85,17 +95,25 @@ def _simulate(job: tuple[str, dict[str, Any], float, str]) -> tuple[str, str | N
     scene, overrides, t_end, path = job
     if not Path(path).exists():
         try:
-            save_result(simulate(scene, overrides, t_end=t_end), path)
+            result = simulate(scene, overrides, t_end=t_end)
         except Error as exc:
             return path, f"{type(exc).__name__}: {exc}"
+        if result.cause == INTERRUPTED:  # not the run of these parameters: not saved, so a resumed study makes it
+            raise KeyboardInterrupt
+        save_result(result, path)
     return path, None
 
 
 def _outcomes(todo: list, workers: int):
-    """(path, error) of each job as it finishes (in order), in worker processes when workers > 1."""
+    """(path, error) of each job as it finishes (in order), in worker processes when workers > 1.
+
+    A stop (Ctrl-C) drops the jobs not started; the runs in progress finish (and are saved) first."""
     if workers > 1 and len(todo) > 1:
-        with ProcessPoolExecutor(max_workers=workers) as pool:
+        pool = ProcessPoolExecutor(max_workers=workers)
+        try:
             yield from pool.map(_simulate, todo)
+        finally:
+            pool.shutdown(wait=True, cancel_futures=True)
     else:
         yield from map(_simulate, todo)
 
@@ -170,17 +188,59 @@ def table_markdown(entries: list[dict]) -> str:
     return "\n".join(lines) + "\n"
 
 
+def workers_count(text: str) -> int:
+    """argparse type of ``--workers``: an integer >= 1."""
+    try:
+        value = int(text)
+    except ValueError:
+        value = 0
+    if value < 1:
+        raise argparse.ArgumentTypeError(f"{text!r} is not an integer >= 1")
+    return value
+
+
+def writable_runs_folder(out: Path) -> Path:
+    """``OUT/runs``, created and checked writable before any run (:class:`SweepError` otherwise)."""
+    runs = out / "runs"
+    try:
+        runs.mkdir(parents=True, exist_ok=True)
+        with tempfile.TemporaryFile(dir=runs):
+            pass
+    except OSError as exc:
+        raise SweepError(f"--out={str(out)!r} cannot be written ({exc.strerror or exc}); choose another folder", key="out", value=str(out)) from None
+    return runs
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     parser = argparse.ArgumentParser(prog="python -m robot.sweep.claims_study", description=__doc__.split("\n\n")[0])
     parser.add_argument("sweeps", nargs="+", type=Path, help="sweep files whose base scene is 'compound'")
     parser.add_argument("--out", type=Path, default=Path("out/claims_study"))
-    parser.add_argument("--workers", type=int, default=1)
+    parser.add_argument("--workers", type=workers_count, default=1, help="processes running the simulations (default 1)")
     args = parser.parse_args(argv)
-    entries = run_study(parameter_sets(args.sweeps), args.out, args.workers)
+    try:
+        sets = parameter_sets(args.sweeps)
+        runs = writable_runs_folder(args.out)
+    except RobotError as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return EXIT_BAD_INPUT
+    try:
+        entries = run_study(sets, args.out, args.workers)
+    except KeyboardInterrupt:
+        return interrupted_exit(runs)
     atomic_write_text(args.out / "claims_study.json", json.dumps(entries, indent=2, default=float))
     atomic_write_text(args.out / "claims_study.md", table_markdown(entries))
     print(table_markdown(entries))
-    return 0
+    return EXIT_OK
+
+
+def interrupted_exit(runs: Path) -> int:
+    """Say where the saved runs are and how to resume; 1 if runs are saved, else 130."""
+    saved = len(list(runs.glob("*.npz")))
+    if not saved:
+        print("interrupted before any run was saved", file=sys.stderr)
+        return EXIT_INTERRUPTED
+    print(f"interrupted: the runs finished ({saved}) are saved in {runs}; run the same command again to resume (saved runs are kept)", file=sys.stderr)
+    return EXIT_INTERRUPTED_WITH_RUNS
 
 
 if __name__ == "__main__":

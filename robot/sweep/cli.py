@@ -27,22 +27,28 @@ def add_arguments(parser: argparse.ArgumentParser) -> argparse.ArgumentParser:
     return parser
 
 
-def run(args: argparse.Namespace) -> int:
-    from robot.errors import RobotError
-    from robot.sweep.engine import run_sweep
+def plan(args: argparse.Namespace):
+    """The checked sweep file and the output folder of the options (bad input raises :class:`SweepError`)."""
+    from robot.sweep.errors import SweepError
     from robot.sweep.spec import load_sweep
 
-    try:
-        if args.workers is not None and args.workers < 1:
-            from robot.sweep.errors import SweepError
+    if args.workers is not None and args.workers < 1:
+        raise SweepError(f"--workers={args.workers} must be >= 1", key="workers", value=args.workers)
+    spec = load_sweep(args.sweep_file)
+    return spec, args.out if args.out is not None else Path("out") / "sweeps" / spec.name
 
-            raise SweepError(f"--workers={args.workers} must be >= 1", key="workers", value=args.workers)
-        spec = load_sweep(args.sweep_file)
-        out = args.out if args.out is not None else Path("out") / "sweeps" / spec.name
-        outcome = run_sweep(spec, out, scheduler=args.scheduler, workers=args.workers, progress=args.progress, overwrite=args.overwrite, retry_failed=args.retry_failed)
-    except RobotError as exc:
-        print(f"error: {exc}", file=sys.stderr)
-        return EXIT_BAD_INPUT
+
+def sweep(args: argparse.Namespace, spec, out: Path, stop=None):
+    """Run the sweep of ``spec`` into ``out`` as the options say (``stop``: :func:`robot.sweep.engine.run_sweep`)."""
+    from robot.sweep.engine import run_sweep
+
+    return run_sweep(
+        spec, out, scheduler=args.scheduler, workers=args.workers, progress=args.progress, overwrite=args.overwrite, retry_failed=args.retry_failed, stop=stop
+    )
+
+
+def report(args: argparse.Namespace, spec, outcome, out: Path) -> int:
+    """Print the outcome, draw the figures (unless ``--no-figures``); the exit code."""
     print(outcome)
     if not args.no_figures:
         from robot.sweep.report import draw_all
@@ -50,6 +56,18 @@ def run(args: argparse.Namespace) -> int:
         for path in draw_all(spec, outcome.store, out):
             print(f"wrote {path}")
     return EXIT_RUNS_FAILED if outcome.exit_code else EXIT_OK
+
+
+def run(args: argparse.Namespace) -> int:
+    from robot.errors import RobotError
+
+    try:
+        spec, out = plan(args)
+        outcome = sweep(args, spec, out)
+    except RobotError as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return EXIT_BAD_INPUT
+    return report(args, spec, outcome, out)
 
 
 def main(argv: list[str] | None = None) -> int:

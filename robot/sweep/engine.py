@@ -13,6 +13,11 @@ Resuming: runs whose stored ``run_key`` equals the key of their resolved scene
 and whose ``done`` flag is set are skipped; failed runs are redone only with
 ``retry_failed``. A store written by a sweep of another layout (other axes,
 values or outputs) is refused unless ``overwrite``.
+
+Stopping: ``run_sweep(..., stop=...)`` asks ``stop()`` while it waits for the
+runs; once true, the runs not finished are cancelled (those in flight are not
+recorded, so a resumed sweep makes them) and the outcome is ``interrupted``,
+with the number of runs the store holds (``finished``).
 """
 
 from __future__ import annotations
@@ -24,7 +29,7 @@ import time
 from contextlib import contextmanager
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Iterator
+from typing import Any, Callable, Iterator
 
 import numpy as np
 
@@ -35,6 +40,10 @@ from robot.sweep.task import RunTask, execute, probe, resolve_parameters
 
 #: environment of every local worker: one thread for every numeric library (processes give the parallelism)
 SINGLE_THREADED = {"OMP_NUM_THREADS": "1", "OPENBLAS_NUM_THREADS": "1", "MKL_NUM_THREADS": "1", "NUMBA_NUM_THREADS": "1"}
+#: how long the driver tries to reach a running scheduler (``scheduler=ADDRESS``) before it gives up
+CONNECT_TIMEOUT_S = 10.0
+#: how often the driver looks for a stop request while it waits for runs (s; a run's end is seen this late at most)
+STOP_POLL_S = 0.05
 
 
 @dataclass
@@ -52,6 +61,10 @@ class SweepOutcome:
     run_phase_time: float = 0.0
     #: the workers' summaries of the runs made now (status, cause, wall and integration times)
     summaries: list[dict[str, Any]] = field(default_factory=list)
+    #: the sweep was stopped (``stop``) before every run was made; the runs in flight were dropped
+    interrupted: bool = False
+    #: runs the store holds for this sweep (done, current key; failed ones included): set when interrupted
+    finished: int = 0
 
     @property
     def failed(self) -> int:
@@ -141,6 +154,26 @@ def store_attrs(spec: SweepSpec) -> dict[str, Any]:
     }
 
 
+def scheduler_client(scheduler: str):
+    """A client of the running scheduler at ``scheduler``; a malformed or unreachable address is bad input."""
+    from distributed import Client
+
+    try:
+        return Client(scheduler, timeout=CONNECT_TIMEOUT_S)
+    except (ValueError, TypeError) as exc:
+        raise SweepError(
+            f"--scheduler={scheduler!r} is not a dask scheduler address ({exc}); give one such as tcp://127.0.0.1:8786",
+            key="scheduler",
+            value=scheduler,
+        ) from None
+    except OSError as exc:
+        raise SweepError(
+            f"--scheduler={scheduler!r}: no dask scheduler could be reached at that address ({exc}); start one there or give another address",
+            key="scheduler",
+            value=scheduler,
+        ) from None
+
+
 @contextmanager
 def dask_client(scheduler: str | None, workers: int | None) -> Iterator[Any]:
     """A client of the scheduler at ``scheduler``, or of a local cluster of ``workers`` processes."""
@@ -148,7 +181,7 @@ def dask_client(scheduler: str | None, workers: int | None) -> Iterator[Any]:
     from distributed import Client, LocalCluster
 
     if scheduler is not None:
-        with Client(scheduler, timeout="30s") as client:
+        with scheduler_client(scheduler) as client:
             yield client
         return
     n = workers or os.cpu_count() or 1
@@ -209,13 +242,36 @@ def _progress(total: int, enabled: bool | None):
     return tqdm(total=total, unit="run", desc="sweep", disable=not enabled, dynamic_ncols=True)
 
 
-def _run_tasks(client, tasks: list[RunTask], layout: Layout, bar) -> list[dict[str, Any]]:
-    """Submit the tasks, follow them; a task that raised (a worker lost) is recorded as failed."""
+def _never() -> bool:
+    return False
+
+
+def _completed(futures: dict, stop: Callable[[], bool]) -> Iterator[Any]:
+    """The futures as they finish; ends early, leaving the rest in ``futures``, once ``stop()`` is true."""
     from distributed import as_completed
 
+    pending = as_completed(futures)
+    while not pending.is_empty() and not stop():
+        batch = pending.next_batch(block=False)
+        if not batch:
+            time.sleep(STOP_POLL_S)
+        for future in batch:
+            if stop():
+                return
+            yield future
+
+
+def _run_tasks(client, tasks: list[RunTask], layout: Layout, bar, stop: Callable[[], bool] = _never) -> list[dict[str, Any]]:
+    """Submit the tasks, follow them; a task that raised (a worker lost) is recorded as failed.
+
+    Once ``stop()`` is true the runs not finished are cancelled (a run in flight is not
+    recorded: a resumed sweep makes it again) and the summaries so far are returned.
+    """
+    if stop():
+        return []
     futures = {client.submit(execute, task, layout, key=f"run-{task.flat}-{task.key[:12]}", pure=False): task for task in tasks}
     summaries, failed = [], 0
-    for future in as_completed(futures):
+    for future in _completed(futures, stop):
         task = futures.pop(future)
         try:
             summary = future.result()
@@ -227,6 +283,8 @@ def _run_tasks(client, tasks: list[RunTask], layout: Layout, bar) -> list[dict[s
         summaries.append(summary)
         bar.set_postfix(failed=failed, refresh=False)
         bar.update(1)
+    if futures:
+        client.cancel(list(futures))
     return summaries
 
 
@@ -243,6 +301,13 @@ def store_causes(path: Path) -> dict[str, int]:
     return out
 
 
+def finished_count(spec: SweepSpec, path: Path) -> int:
+    """Runs of ``spec`` the store at ``path`` holds (done with their current key, failed ones included)."""
+    if existing_layout_key(path) != spec.layout_key:
+        return 0
+    return spec.design.size - len(_todo(spec, path, retry_failed=False))
+
+
 def run_sweep(
     spec: SweepSpec,
     out: str | Path,
@@ -252,8 +317,14 @@ def run_sweep(
     progress: bool | None = None,
     overwrite: bool = False,
     retry_failed: bool = False,
+    stop: Callable[[], bool] | None = None,
 ) -> SweepOutcome:
-    """Run every run of ``spec`` that the store at ``out`` does not hold yet (module docstring)."""
+    """Run every run of ``spec`` that the store at ``out`` does not hold yet (module docstring).
+
+    ``stop``: asked while the runs are waited for; once it returns true the sweep ends
+    early (``interrupted``; the finished runs stay in the store, a resumed sweep skips them).
+    """
+    stop = stop or _never
     started = time.perf_counter()
     path = Path(out) / "sweep.zarr"
     existing = existing_layout_key(path)
@@ -271,13 +342,21 @@ def run_sweep(
     outcome = SweepOutcome(path, len(tasks), skipped=len(tasks) - len(todo))
     if todo:
         path.parent.mkdir(parents=True, exist_ok=True)
-        with dask_client(scheduler, workers) as client:
-            layout = _prepare_store(spec, path, client, tasks) if existing is None else _layout_of_store(spec, path)
-            with _progress(len(todo), progress) as bar:
-                submitted = time.perf_counter()
-                outcome.summaries = _run_tasks(client, [tasks[i] for i in todo], layout, bar)
-                outcome.run_phase_time = time.perf_counter() - submitted
-        outcome.ran = len(todo)
-    outcome.causes = store_causes(path)
+        try:
+            with dask_client(scheduler, workers) as client:
+                layout = _prepare_store(spec, path, client, tasks) if existing is None else _layout_of_store(spec, path)
+                with _progress(len(todo), progress) as bar:
+                    submitted = time.perf_counter()
+                    outcome.summaries = _run_tasks(client, [tasks[i] for i in todo], layout, bar, stop)
+                    outcome.run_phase_time = time.perf_counter() - submitted
+        except Exception:
+            if not stop():
+                raise
+            # a terminal's Ctrl-C reaches the local workers too: one starting then fails; the stop is what happened
+        outcome.ran = len(outcome.summaries)
+        outcome.interrupted = outcome.ran < len(todo)
+    if outcome.interrupted:
+        outcome.finished = finished_count(spec, path)
+    outcome.causes = store_causes(path) if existing_layout_key(path) is not None else {}
     outcome.wall_time = time.perf_counter() - started
     return outcome

@@ -1,0 +1,193 @@
+"""``clearance sweep``, ``clearance bench-sweep`` and the claims study on bad input and on Ctrl-C.
+
+Bad options exit 2 with a message naming the option and its value, before any
+run; an interrupted sweep keeps its finished runs and says how to resume (exit
+1), or exits 130 when nothing was finished; an interrupted claims study does not
+save the run it stopped as if it were finished.
+"""
+
+from __future__ import annotations
+
+import os
+import signal
+import socket
+import subprocess
+import sys
+import time
+from pathlib import Path
+from types import SimpleNamespace
+
+import numpy as np
+import pytest
+
+pytest.importorskip("distributed")
+import zarr  # noqa: E402
+
+from robot.cli.common import EXIT_BAD_INPUT, EXIT_INTERRUPTED, EXIT_RUN_FAILED  # noqa: E402
+from robot.cli.main import main  # noqa: E402
+from robot.sweep import claims_study, engine  # noqa: E402
+
+ROOT = Path(__file__).resolve().parents[1]
+
+SMALL = """
+[sweep]
+scene = "spherical"
+t_end = 0.01
+
+[[axis]]
+key = "clearance.S1.clearance"
+values = [5e-5, 1e-4]
+"""
+
+#: the first run is short, the second one long enough (~10 s) to be in flight when the signal comes
+SHORT_THEN_LONG = """
+[sweep]
+scene = "spherical"
+t_end = 0.01
+
+[[axis]]
+key = "duration"
+values = [0.01, 30.0]
+"""
+
+
+def _file(folder: Path, text: str, name: str = "sweep.toml") -> str:
+    path = folder / name
+    path.write_text(text)
+    return str(path)
+
+
+def _cli(capsys, *argv) -> tuple[int, str]:
+    code = main([str(a) for a in argv])
+    return code, capsys.readouterr().err
+
+
+def _free_port() -> int:
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
+# --- bad options: exit 2 before any run ----------------------------------------------------
+
+
+def test_sweep_out_that_is_a_file_is_refused(capsys, tmp_path):
+    blocker = tmp_path / "file"
+    blocker.write_text("x")
+    code, err = _cli(capsys, "sweep", _file(tmp_path, SMALL), "--out", blocker, "--no-progress", "--no-figures")
+    assert code == EXIT_BAD_INPUT and "Traceback" not in err
+    assert f"--out={str(blocker)!r}" in err and "is a file" in err
+
+
+def test_sweep_scheduler_that_is_no_address_is_refused(capsys, tmp_path):
+    code, err = _cli(capsys, "sweep", _file(tmp_path, SMALL), "--scheduler", "garbage", "--out", tmp_path / "out", "--no-figures")
+    assert code == EXIT_BAD_INPUT and "Traceback" not in err
+    assert "--scheduler='garbage'" in err and "not a dask scheduler address" in err
+    assert not (tmp_path / "out" / "sweep.zarr").exists()
+
+
+def test_sweep_scheduler_that_cannot_be_reached_is_refused(capsys, tmp_path, monkeypatch):
+    monkeypatch.setattr(engine, "CONNECT_TIMEOUT_S", 1.0)
+    address = f"tcp://127.0.0.1:{_free_port()}"  # nothing listens there
+    started = time.monotonic()
+    code, err = _cli(capsys, "sweep", _file(tmp_path, SMALL), "--scheduler", address, "--out", tmp_path / "out", "--no-figures")
+    assert code == EXIT_BAD_INPUT and "Traceback" not in err
+    assert f"--scheduler={address!r}" in err and "could be reached at that address" in err
+    assert time.monotonic() - started < 20
+
+
+@pytest.mark.parametrize("target", ["folder", "/proc/nope/x.json"])
+def test_bench_sweep_out_is_checked_before_the_benchmark(capsys, tmp_path, target):
+    out = tmp_path if target == "folder" else target
+    started = time.monotonic()
+    code, err = _cli(capsys, "bench-sweep", "--runs", "1", "--t-end", "0.001", "--out", out)
+    assert code == EXIT_BAD_INPUT and "Traceback" not in err and "--out" in err and str(Path(out).parent if target != "folder" else out) in err
+    assert time.monotonic() - started < 5  # no cluster was started
+
+
+def test_claims_study_of_a_missing_sweep_file_is_one_line(capsys, tmp_path):
+    missing = tmp_path / "nonexist.toml"
+    assert claims_study.main([str(missing), "--out", str(tmp_path / "cs")]) == 2
+    err = capsys.readouterr().err
+    assert err.strip().splitlines() == [f"error: sweep file {str(missing)!r} does not exist"]
+
+
+def test_claims_study_out_that_is_a_file_is_refused_before_any_run(capsys, tmp_path):
+    blocker = tmp_path / "file"
+    blocker.write_text("x")
+    sweep = _file(tmp_path, SMALL.replace('"spherical"', '"compound"').replace("S1.clearance", "R1.radial_clearance"))
+    assert claims_study.main([sweep, "--out", str(blocker)]) == 2
+    err = capsys.readouterr().err
+    assert f"--out={str(blocker)!r} cannot be written" in err and "Traceback" not in err
+
+
+# --- interrupts ----------------------------------------------------------------------------
+
+
+def _done(store: Path) -> int:
+    try:
+        return int(np.count_nonzero(zarr.open_group(str(store), mode="r")["done"][...]))
+    except Exception:  # not created yet
+        return 0
+
+
+def test_ctrl_c_after_a_finished_run_keeps_it_and_says_how_to_resume(tmp_path, kernel_library_dir):
+    out = tmp_path / "out"
+    store = out / "sweep.zarr"
+    command = [sys.executable, str(ROOT / "scripts" / "sweep.py"), _file(tmp_path, SHORT_THEN_LONG), "--workers", "1", "--out", str(out), "--no-progress", "--no-figures"]
+    environment = {**os.environ, "PYTHONPATH": str(ROOT), "CLEARANCE_KERNEL_DIR": str(kernel_library_dir.parent)}
+    driver = subprocess.Popen(command, env=environment, start_new_session=True, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    try:
+        deadline = time.monotonic() + 60
+        while _done(store) < 1 and driver.poll() is None and time.monotonic() < deadline:
+            time.sleep(0.02)
+        assert driver.poll() is None, driver.communicate()
+        os.killpg(driver.pid, signal.SIGINT)  # as Ctrl-C on a terminal: the driver and its workers
+        _, err = driver.communicate(timeout=40)
+    finally:
+        if driver.poll() is None:
+            os.killpg(driver.pid, signal.SIGKILL)
+            driver.wait()
+    assert driver.returncode == EXIT_RUN_FAILED, err
+    finished = _done(store)
+    assert finished == 1, err  # the long run was in flight: dropped, not recorded as failed
+    assert f"{finished} of 2 runs finished" in err and str(store) in err and "same command again to resume" in err
+    assert "Traceback" not in err
+
+
+def _outcome(finished: int, failed: int = 0):
+    return SimpleNamespace(finished=finished, total=4, failed=failed, store=Path("/tmp/sw/sweep.zarr"))
+
+
+def test_an_interrupted_sweep_without_finished_runs_exits_130(capsys):
+    from robot.cli.sweep import interrupted_exit
+
+    assert interrupted_exit(_outcome(0), ["SIGINT"]) == EXIT_INTERRUPTED
+    assert "before any run finished" in capsys.readouterr().err
+
+
+def test_an_interrupted_sweep_with_finished_runs_exits_1_naming_the_store(capsys):
+    from robot.cli.sweep import interrupted_exit
+
+    assert interrupted_exit(_outcome(2, failed=1), ["SIGTERM"]) == EXIT_RUN_FAILED
+    err = capsys.readouterr().err
+    assert err.startswith("SIGTERM: ") and "2 of 4 runs finished, 1 of them failed" in err
+    assert "/tmp/sw/sweep.zarr" in err and "same command again to resume" in err
+
+
+def test_claims_study_does_not_save_an_interrupted_run(tmp_path, monkeypatch):
+    import robot.run
+
+    monkeypatch.setattr(robot.run, "simulate", lambda *args, **kwargs: SimpleNamespace(cause="interrupted"))
+    with pytest.raises(KeyboardInterrupt):
+        claims_study._simulate(("compound", {}, 0.01, str(tmp_path / "runs" / "run.npz")))
+    assert not (tmp_path / "runs").exists()
+
+
+@pytest.mark.parametrize("saved, code", [(0, EXIT_INTERRUPTED), (2, EXIT_RUN_FAILED)])
+def test_an_interrupted_claims_study_says_what_is_saved(capsys, tmp_path, saved, code):
+    for i in range(saved):
+        (tmp_path / f"run{i}.npz").write_bytes(b"")
+    assert claims_study.interrupted_exit(tmp_path) == code
+    err = capsys.readouterr().err
+    assert (f"({saved}) are saved in {tmp_path}" in err) == bool(saved)
