@@ -73,3 +73,7 @@ class RedundantConstraintWarning(RobotWarning):
 
 class InitialStateWarning(RobotWarning):
     """A given initial coordinate had to be corrected to satisfy the constraints."""
+
+
+class InertiaWarning(RobotWarning):
+    """A link's inertia breaks the triangle inequalities: no rigid body has those moments (used as given)."""

@@ -107,7 +107,7 @@ def test_a_creeping_run_fails_as_stalled_instead_of_running_forever():
     options = SolverOptions(method="RK45", rtol=1e-10, atol=1e-10, max_step=0.1)
     trajectory = EventDrivenIntegrator(_Switching(), np.array([1.0]), (0.0, 3.0), options).run()
     assert trajectory.status == -1 and trajectory.cause == "integration stalled"
-    assert 1.0 <= trajectory.t_end < 1.01 and trajectory.n_steps <= 3 * STALL_WINDOW
+    assert 1.0 <= trajectory.t_end < 1.01 and trajectory.n_steps <= 4 * STALL_WINDOW
     assert "max_steps" in trajectory.message and trajectory.message.startswith("t=1.")
     # with a budget its pace fits in, the same creeping run goes on through two windows to its end
     generous = FailureLimits(max_steps=1e12)

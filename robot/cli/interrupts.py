@@ -5,8 +5,9 @@ depends on the phase it arrives in:
 
 * ``PREPARING`` (reading the scene, building the model): nothing to save; the
   command stops at once (``KeyboardInterrupt``, exit status 130).
-* ``RUNNING``: inside the integration (:func:`robot.integration.simulation.integrate`
-  is on the interrupted stack) the signal raises ``KeyboardInterrupt``, which the
+* ``RUNNING``: inside the integration (the step loop's
+  ``EventDrivenIntegrator.run`` is on the interrupted stack: the Lagrange model's
+  runs and the Newton-Euler cross-check's) the signal raises ``KeyboardInterrupt``, which the
   step loop turns into a run stopped with cause ``interrupted``; the command then
   computes the outputs and saves the partial result. Outside the integration
   (computing the outputs) the signal is only noted.

@@ -15,7 +15,7 @@ examples:
 table allows (robot/scene/loader.py); --first-step may not exceed the largest
 step. A failed engine run does not stop the study: the command ends with exit
 status 1 and names each failed run, the time it reached and the cause. Ctrl-C or
-SIGTERM stops a Lagrange integration at once (a Newton-Euler or Exudyn run under
+SIGTERM stops a Lagrange or Newton-Euler integration at once (an Exudyn run under
 way finishes first) and the study before its next run; what was computed is
 kept (validation.json, rewritten after every scene, and the figures), exit status 1.
 """

@@ -370,12 +370,13 @@ class _Phases:
 
     def stopped(self, stopped: wp.StudyStopped, signals: list[str]) -> int:
         """Save what finished, marked ``incomplete`` (step, cause, time); say where; exit status 1."""
-        cause = stopped.cause
-        if cause == wp.INTERRUPTED:
-            cause = f"interrupted by the user ({signals[0]})" if signals else "interrupted by the user"
+        # why the study stopped (a study's reason, not a run's failure cause: docs/dynamics.md lists those)
+        reason = stopped.reason
+        if reason == wp.INTERRUPTED:
+            reason = f"interrupted by the user ({signals[0]})" if signals else "interrupted by the user"
         self.report["incomplete"] = {
             "step": self.step,
-            "cause": cause,
+            "cause": reason,
             "message": str(stopped),
             "stopped_run": stopped.stopped_run,  # its counts (label, t_reached, ...), None if stopped between runs
             "elapsed_s": time.perf_counter() - self.started,

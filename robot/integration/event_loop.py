@@ -54,6 +54,8 @@ from robot.integration.solvers import SecondOrderStructure, make_solver
 
 #: restarts at one instant before the run is declared failed (contact events that make no progress)
 MAX_STALLED_RESTARTS = 20
+#: consecutive STALL_WINDOWs too slow for FailureLimits.max_steps before the run is declared stalled
+STALLED_WINDOWS = 2
 _NONE = np.zeros(0, dtype=np.intp)
 
 
@@ -145,6 +147,7 @@ class EventDrivenIntegrator:
         self.first_step = options.first_step
         self.stalled = 0
         self.pace_mark = self.t0  # time at the start of the current STALL_WINDOW of steps
+        self.slow_windows = 0  # consecutive windows whose pace would exceed max_steps
         self.solver = None
         self.pen = self.rate = None  # penetrations and rates at (self.t, self.y)
 
@@ -278,15 +281,21 @@ class EventDrivenIntegrator:
         return _Step(solver.t_old, t_new, y_new, self.probe(t_new, y_new))
 
     def check_pace(self, t_new: float) -> None:
-        """Every ``STALL_WINDOW`` steps: the steps taken plus those the last window's pace needs to the end."""
+        """Every ``STALL_WINDOW`` steps: the steps taken plus those the last window's pace needs to the end.
+
+        Two windows in a row must be that slow: one window of chattering early in a long
+        run (a burst of impacts) is not a stall.
+        """
         steps, advance = self.counts["steps"], t_new - self.pace_mark
         self.pace_mark = t_new
         remaining = self.t_final - t_new
         needed = steps + (STALL_WINDOW * remaining / advance if advance > 0 else math.inf) if remaining > 0 else steps
-        if needed > self.limits.max_steps:
+        self.slow_windows = self.slow_windows + 1 if needed > self.limits.max_steps else 0
+        if self.slow_windows >= STALLED_WINDOWS:
             raise _Failure(
                 "integration stalled",
-                f"t={t_new:.9g} s: the last {STALL_WINDOW} steps advanced {advance:.3e} s; at that pace the run needs "
+                f"t={t_new:.9g} s: the last {STALL_WINDOW} steps advanced {advance:.3e} s (the {STALL_WINDOW} before "
+                f"were as slow); at that pace the run needs "
                 f"{needed:.2e} steps (limit max_steps = {self.limits.max_steps:.2e}): a singular configuration or a "
                 "right-hand side that is not smooth (e.g. constraint rows switching near a rank loss)",
             )

@@ -52,7 +52,7 @@ class FailureLimits:
     parts); ``max_residual``: constraint drift (m or rad); ``min_step``: step-size
     collapse; ``max_wall_time``: seconds (``inf``: none); ``max_steps``: accepted
     steps, counting those still needed to reach the end at the pace of the last
-    ``STALL_WINDOW`` steps (a run creeping forward at 1e-10 s a step has not
+    ``STALL_WINDOW`` steps, in two windows in a row (a run creeping forward at 1e-10 s a step has not
     collapsed below ``min_step`` but will never finish).
     """
 

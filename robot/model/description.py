@@ -20,25 +20,28 @@ file order. This module only parses and validates; it builds no model.
 
 Masses and inertias are checked here (Pinocchio and urdfdom take any number, NaN
 included, and a run would fail later in the solver): an ``<inertial>`` element
-needs a finite mass > 0 and a finite, positive semi-definite inertia (zero for a
-point mass, one zero moment for a thin rod) whose moments satisfy the triangle
-inequalities (Ixx + Iyy >= Izz and permutations, in the
-given axes and in the principal axes). A link without ``<inertial>`` is massless,
-which URDF allows (a ground or world link, a frame link fixed to another); but a
-movable joint must carry some mass: if no link of its subtree has an
-``<inertial>``, the mass matrix is singular and the file is refused.
+needs a finite mass >= 0 and a finite, positive semi-definite inertia (zero for a
+point mass, one zero moment for a thin rod); moments that break the triangle
+inequalities (Ixx + Iyy >= Izz and permutations, in the given and the principal
+axes, beyond 2 % of the trace) are warned about (``InertiaWarning``), not refused:
+files often give only the moment that matters, e.g. izz of a planar link. A link
+without ``<inertial>``, or with mass and inertia 0, is massless, which URDF allows
+(a ground or world link, a tool frame, the cross of a universal joint); but a
+movable joint must carry some mass: if no link of its subtree has mass or
+inertia, the mass matrix is singular and the file is refused.
 """
 
 from __future__ import annotations
 
 import math
+import warnings
 import xml.etree.ElementTree as ET
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
-from robot.errors import MechanismFileError
+from robot.errors import InertiaWarning, MechanismFileError
 
 CLOSURE_TYPES = ("spherical", "revolute")
 #: URDF kinds of tree joints that can carry clearance -> the kind of clearance site they make
@@ -48,9 +51,11 @@ MOVABLE_KINDS = ("revolute", "continuous", "prismatic", "floating", "planar")
 #: the six components of a URDF ``<inertia>`` element (kg m^2)
 INERTIA_COMPONENTS = ("ixx", "ixy", "ixz", "iyy", "iyz", "izz")
 #: slack of the triangle inequalities, relative to the trace (moments rounded to a few digits, e.g. a thin plate's)
-TRIANGLE_SLACK = 1e-3
+TRIANGLE_SLACK = 2e-2
 #: a principal moment below -this x the largest is negative beyond rounding (a point mass or a thin rod has zeros)
 NEGATIVE_MOMENT_RATIO = 1e-9
+#: ... or below -this (kg m^2): exporters' noise on a zero inertia
+NEGATIVE_MOMENT_FLOOR = 1e-12
 #: the valid range of an inertia, for the messages
 INERTIA_RANGE = (
     "valid: a positive semi-definite matrix (zero for a point mass) whose moments satisfy the triangle "
@@ -156,20 +161,22 @@ def _number(text: str | None) -> float:
         return math.nan
 
 
-def _check_mass(inertial: ET.Element, link: str, where: str) -> None:
+def _check_mass(inertial: ET.Element, link: str, where: str) -> float:
+    """The link's mass (kg): finite and >= 0 (0 with a zero inertia is how many exporters write a massless frame)."""
     element = inertial.find("mass")
     text = element.get("value") if element is not None else None
     if text is None:
         raise MechanismFileError(
-            f"{where}: <inertial> has no <mass value=...>; give the mass in kg (a finite number > 0), "
+            f"{where}: <inertial> has no <mass value=...>; give the mass in kg (a finite number >= 0), "
             "or leave out the whole <inertial> element of a massless link (a frame)", key=f"{link}.mass",
         )
     value = _number(text)
-    if not (math.isfinite(value) and value > 0.0):
+    if not (math.isfinite(value) and value >= 0.0):
         raise MechanismFileError(
-            f"{where}: mass={text!r} is outside the valid range: a finite number > 0 (kg); "
-            "a massless link (a frame) has no <inertial> element at all", key=f"{link}.mass", value=text,
+            f"{where}: mass={text!r} is outside the valid range: a finite number >= 0 (kg; 0 or no <inertial> "
+            "element: a massless link)", key=f"{link}.mass", value=text,
         )
+    return value
 
 
 def _inertia_values(inertial: ET.Element, link: str, where: str) -> dict[str, float]:
@@ -189,14 +196,16 @@ def _inertia_values(inertial: ET.Element, link: str, where: str) -> dict[str, fl
 
 def _triangle_violation(moments) -> str | None:
     """The first of I1 + I2 >= I3 (and permutations) that ``moments`` break beyond the rounding slack, as text."""
-    slack = TRIANGLE_SLACK * float(np.sum(moments))
+    slack = max(TRIANGLE_SLACK * float(np.sum(moments)), NEGATIVE_MOMENT_FLOOR)
     for i, j, k in ((0, 1, 2), (1, 2, 0), (2, 0, 1)):
         if moments[i] + moments[j] < moments[k] - slack:
             return f"{moments[i]:.6g} + {moments[j]:.6g} < {moments[k]:.6g}"
     return None
 
 
-def _check_inertia(inertial: ET.Element, link: str, where: str) -> None:
+def _check_inertia(inertial: ET.Element, link: str, where: str) -> float:
+    """The trace of the link's inertia: finite components, no negative principal moment beyond rounding; a broken
+    triangle inequality is warned about (files often give only the moment that matters, e.g. izz of a planar link)."""
     values = _inertia_values(inertial, link, where)
     given = ", ".join(f"{name}={value:g}" for name, value in values.items())
     matrix = np.array([
@@ -205,7 +214,7 @@ def _check_inertia(inertial: ET.Element, link: str, where: str) -> None:
         [values["ixz"], values["iyz"], values["izz"]],
     ])  # fmt: skip
     principal = np.linalg.eigvalsh(matrix)  # ascending
-    if principal[0] < -NEGATIVE_MOMENT_RATIO * max(principal[-1], 0.0):
+    if principal[0] < -max(NEGATIVE_MOMENT_RATIO * principal[-1], NEGATIVE_MOMENT_FLOOR):
         moments = ", ".join(f"{m:.6g}" for m in principal)
         raise MechanismFileError(
             f"{where}: inertia ({given}) has a negative principal moment ({moments} kg m^2); {INERTIA_RANGE}",
@@ -215,14 +224,16 @@ def _check_inertia(inertial: ET.Element, link: str, where: str) -> None:
     for axes, moments in (("", np.diag(matrix)), ("principal moments: ", principal)):
         broken = _triangle_violation(moments)
         if broken is not None:
-            raise MechanismFileError(
-                f"{where}: inertia ({given}) breaks the triangle inequality ({axes}{broken} kg m^2); {INERTIA_RANGE}",
-                key=f"{link}.inertia", value=given,
+            warnings.warn(
+                f"{where}: inertia ({given}) breaks the triangle inequality ({axes}{broken} kg m^2): no rigid body "
+                "has these moments; the run uses them as given", InertiaWarning, stacklevel=2,
             )
+            break
+    return float(np.trace(matrix))
 
 
 def _massive_links(root: ET.Element, label: str) -> set[str]:
-    """The links with an ``<inertial>`` element, each checked (mass, inertia, origin)."""
+    """The links with mass or inertia (an ``<inertial>`` element not all zero), each ``<inertial>`` checked."""
     massive = set()
     for element in root.findall("link"):
         inertial = element.find("inertial")
@@ -230,13 +241,14 @@ def _massive_links(root: ET.Element, label: str) -> set[str]:
             continue
         name = element.get("name", "")
         where = f"{label}: link {name!r}"
-        _check_mass(inertial, name, where)
-        _check_inertia(inertial, name, where)
+        mass = _check_mass(inertial, name, where)
+        trace = _check_inertia(inertial, name, where)
         origin = inertial.find("origin")
         if origin is not None:
             _vector(origin, "xyz", f"{where} <inertial><origin>")
             _vector(origin, "rpy", f"{where} <inertial><origin>")
-        massive.add(name)
+        if mass > 0.0 or trace > 0.0:  # mass 0 and inertia 0: a massless frame written out
+            massive.add(name)
     return massive
 
 
@@ -252,7 +264,7 @@ def _subtree_links(link: str, children: dict[str, list[str]]) -> list[str]:
 
 
 def _check_moving_bodies_have_mass(joints: dict[str, JointDeclaration], massive: set[str], label: str) -> None:
-    """Refuse a movable joint whose subtree has no ``<inertial>``: zero mass and inertia, a singular mass matrix."""
+    """Refuse a movable joint whose subtree has no mass or inertia: a singular mass matrix."""
     children: dict[str, list[str]] = {}
     for joint in joints.values():
         children.setdefault(joint.parent, []).append(joint.child)
@@ -262,8 +274,8 @@ def _check_moving_bodies_have_mass(joints: dict[str, JointDeclaration], massive:
         carried = _subtree_links(joint.child, children)
         if not massive.intersection(carried):
             raise MechanismFileError(
-                f"{label}: joint {joint.name!r} ({joint.kind}) moves link(s) {', '.join(carried)}, none of which has an "
-                "<inertial> element: the body it moves has zero mass and zero inertia, so the mass matrix is singular; "
+                f"{label}: joint {joint.name!r} ({joint.kind}) moves link(s) {', '.join(carried)}, none of which has mass "
+                "or inertia (no <inertial> element, or zeros): the body it moves has zero mass and zero inertia, so the mass matrix is singular; "
                 "give one of them an <inertial> (mass > 0) or make the joint fixed",
                 key=joint.name, value=tuple(carried),
             )

@@ -263,7 +263,7 @@ def failure_report(results: dict, path: Path) -> str:
         )
     if stop:
         skipped = "; ".join(f"{scene}: {', '.join(engines)}" for scene, engines in stop["not_run"].items())
-        lines.append(f"  {stop['cause']}: not run: {skipped}" if skipped else f"  {stop['cause']} came during the last run, which was left to finish: no run was skipped")
+        lines.append(f"  {stop['cause']}: not run: {skipped}" if skipped else f"  {stop['cause']} came during the last run (stopped there, or finished if it was Exudyn's): no run was skipped")
     return "\n".join(lines)
 
 

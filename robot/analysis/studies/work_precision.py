@@ -75,13 +75,13 @@ class StudyStopped(RuntimeError):
 
     ``finished``: what the study completed (its rows, or its map filled so far),
     for the caller to save; ``stopped_run``: the counts of the run it stopped in
-    (``None`` when it stopped between runs); ``cause``: ``"interrupted"`` or
+    (``None`` when it stopped between runs); ``reason``: ``"interrupted"`` or
     why a needed run failed.
     """
 
-    def __init__(self, message: str, finished=None, stopped_run: dict | None = None, cause: str = INTERRUPTED):
+    def __init__(self, message: str, finished=None, stopped_run: dict | None = None, reason: str = INTERRUPTED):
         super().__init__(message)
-        self.finished, self.stopped_run, self.cause = finished, stopped_run, cause
+        self.finished, self.stopped_run, self.reason = finished, stopped_run, reason
 
 
 def run_or_stop(simulate_run: Callable[[], Result], label: str, finished=None, stop: Callable[[], bool] | None = None) -> Result:
@@ -142,7 +142,7 @@ def reference(run: Run, t_end: float, output_step: float, window_tolerance: floa
     check = run_or_stop(partial(simulate, run, replace(CHECK, output_step=output_step), t_end, label=labels[1]), labels[1], done, stop)
     if not (ref.success and check.success):
         done["check"] = check.counts()
-        raise StudyStopped(f"reference runs failed: {ref.message}; {check.message}", done, cause="reference failed")
+        raise StudyStopped(f"reference runs failed: {ref.message}; {check.message}", done, reason="reference failed")
     window = comparable_window(ref, check, window_tolerance)
     reference = Reference(ref, check, window, window_tolerance)
     reference.agreement = errors(check, reference)
