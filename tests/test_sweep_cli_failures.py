@@ -8,11 +8,7 @@ save the run it stopped as if it were finished.
 
 from __future__ import annotations
 
-import os
-import signal
 import socket
-import subprocess
-import sys
 import time
 from pathlib import Path
 from types import SimpleNamespace
@@ -131,28 +127,19 @@ def _done(store: Path) -> int:
         return 0
 
 
-def test_ctrl_c_after_a_finished_run_keeps_it_and_says_how_to_resume(tmp_path, kernel_library_dir):
+def test_a_stop_after_a_finished_run_keeps_it_and_drops_the_run_in_flight(tmp_path, kernel_library_dir, monkeypatch):
+    """What Ctrl-C asks of the engine (robot.cli.sweep passes clean_stops' request as ``stop``), without a
+    signal's timing: stop as soon as the store holds the short run, while the 30 s run is in flight."""
+    from robot.sweep.spec import load_sweep
+
+    monkeypatch.setenv("CLEARANCE_KERNEL_DIR", str(kernel_library_dir.parent))
     out = tmp_path / "out"
     store = out / "sweep.zarr"
-    command = [sys.executable, str(ROOT / "scripts" / "sweep.py"), _file(tmp_path, SHORT_THEN_LONG), "--workers", "1", "--out", str(out), "--no-progress", "--no-figures"]
-    environment = {**os.environ, "PYTHONPATH": str(ROOT), "CLEARANCE_KERNEL_DIR": str(kernel_library_dir.parent)}
-    driver = subprocess.Popen(command, env=environment, start_new_session=True, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
-    try:
-        deadline = time.monotonic() + 60
-        while _done(store) < 1 and driver.poll() is None and time.monotonic() < deadline:
-            time.sleep(0.02)
-        assert driver.poll() is None, driver.communicate()
-        os.killpg(driver.pid, signal.SIGINT)  # as Ctrl-C on a terminal: the driver and its workers
-        _, err = driver.communicate(timeout=40)
-    finally:
-        if driver.poll() is None:
-            os.killpg(driver.pid, signal.SIGKILL)
-            driver.wait()
-    assert driver.returncode == EXIT_RUN_FAILED, err
-    finished = _done(store)
-    assert finished == 1, err  # the long run was in flight: dropped, not recorded as failed
-    assert f"{finished} of 2 runs finished" in err and str(store) in err and "same command again to resume" in err
-    assert "Traceback" not in err
+    outcome = engine.run_sweep(load_sweep(_file(tmp_path, SHORT_THEN_LONG)), out, workers=1, progress=False, stop=lambda: _done(store) >= 1)
+    assert outcome.interrupted and outcome.finished == 1 and _done(store) == 1  # the long run: dropped, not failed
+    from robot.cli.sweep import interrupted_exit
+
+    assert interrupted_exit(outcome, ["SIGINT"]) == EXIT_RUN_FAILED
 
 
 def _outcome(finished: int, failed: int = 0):
