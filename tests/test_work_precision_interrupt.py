@@ -62,6 +62,7 @@ def report(out: Path) -> dict:
 
 
 def test_ctrl_c_in_a_sweep_run_saves_the_finished_runs_and_exits_1(tmp_path, monkeypatch, capsys):
+    handler_before = signal.getsignal(signal.SIGINT)  # default_int_handler, or SIG_IGN in a background job
     interrupt_run(monkeypatch, SECOND_SWEEP_RUN, t_stop=0.02)
     assert execute(tmp_path) == EXIT_RUN_FAILED
     err = capsys.readouterr().err
@@ -75,7 +76,7 @@ def test_ctrl_c_in_a_sweep_run_saves_the_finished_runs_and_exits_1(tmp_path, mon
     assert f"saved in {tmp_path / 'work_precision.json'} (marked incomplete)" in err
     assert "Traceback" not in err
     assert sorted(p.name for p in tmp_path.iterdir()) == ["work_precision.json", "work_precision.png"]  # no temporary file
-    assert signal.getsignal(signal.SIGINT) is signal.default_int_handler  # handlers restored
+    assert signal.getsignal(signal.SIGINT) is handler_before  # handlers restored
 
     monkeypatch.undo()  # the same study again, to its end: complete, no longer marked incomplete
     assert execute(tmp_path) == EXIT_OK
