@@ -55,7 +55,7 @@ from robot.integration.simulation import SolverOptions
 from robot.integration.options import STRUCTURED
 from robot.scene.loader import shipped_scenes
 from robot.analysis.studies import speed, stability
-from robot.analysis.studies.common import simulate
+from robot.analysis.studies.common import INTERRUPTED, StudyStopped, run_or_stop, simulate
 from robot.analysis.studies import work_precision as wp
 
 
@@ -218,7 +218,7 @@ class _Phases:
 
         try:
             rows = wp.run_sweep(self.run, ref, cases, args.t_end, args.output_step, progress, stop=self.stop)
-        except wp.StudyStopped as stopped:
+        except StudyStopped as stopped:
             self.sweep_rows(stopped.finished, finished=False)
             raise
         self.sweep_rows(rows)
@@ -231,7 +231,7 @@ class _Phases:
         self.step = "sweep (its reference solutions)"
         try:
             ref = wp.reference(self.run, args.t_end, args.output_step, stop=self.stop)
-        except wp.StudyStopped as stopped:
+        except StudyStopped as stopped:
             if stopped.finished:
                 self.report["reference"] = stopped.finished
             raise
@@ -262,7 +262,7 @@ class _Phases:
         say("stability: hidden contact onsets")
         hidden_t = 0.1 if not args.quick else 0.03
         # peaks and onsets of a tight run over the same horizon (DOP853, rtol 1e-10)
-        tight = wp.run_or_stop(partial(simulate, run, wp.CHECK, hidden_t, label="hidden-contact reference"), "hidden-contact reference", stop=self.stop)
+        tight = run_or_stop(partial(simulate, run, wp.CHECK, hidden_t, label="hidden-contact reference"), "hidden-contact reference", stop=self.stop)
         hidden_map = partial(
             stability.hidden_contact_map,
             run,
@@ -282,7 +282,7 @@ class _Phases:
         """``where[key] = study()``; a stopped study's partial map is stored there too before the stop goes on."""
         try:
             where[key] = study()
-        except wp.StudyStopped as stopped:
+        except StudyStopped as stopped:
             where[key] = stopped.finished
             raise
         return where[key]
@@ -331,7 +331,7 @@ class _Phases:
 
     def timed(self, options: SolverOptions, t_end: float, label: str, finished) -> dict:
         """:func:`speed.realtime` of ``options`` over ``t_end``, stoppable (``finished``: what a stop keeps)."""
-        return wp.run_or_stop(partial(speed.realtime, self.run, options, t_end), label, finished, self.stop)
+        return run_or_stop(partial(speed.realtime, self.run, options, t_end), label, finished, self.stop)
 
     def realtime_median(self, repeats: list[dict]) -> None:
         real = sorted(repeats, key=lambda r: r["realtime_factor"])[len(repeats) // 2]
@@ -349,11 +349,11 @@ class _Phases:
         self.begin("long horizon")
         self.say(f"long horizon: statistics over [0, {t_end}] s against DOP853 rtol 1e-10")
         label = "DOP853 rtol 1e-10"
-        tight = wp.run_or_stop(partial(simulate, run, SolverOptions("DOP853", rtol=1e-10, atol=1e-12, max_step=1e-3), t_end, label=label), label, stop=self.stop)
+        tight = run_or_stop(partial(simulate, run, SolverOptions("DOP853", rtol=1e-10, atol=1e-12, max_step=1e-3), t_end, label=label), label, stop=self.stop)
         rows: dict = {}
         self.report["long_horizon"] = {"t_end": t_end, "tight": tight.counts(), "runs": rows}  # filled as the runs end
         for options in [run.scene.solver] + candidates:
-            outcome = wp.run_or_stop(partial(simulate, run, options, t_end, label=_label(options)), _label(options), rows, self.stop)
+            outcome = run_or_stop(partial(simulate, run, options, t_end, label=_label(options)), _label(options), rows, self.stop)
             row = outcome.counts()
             row["peak_force_relative_to_tight"] = {j: outcome.peaks[j] / tight.peaks[j] - 1.0 for j in tight.peaks}
             row["impulse_relative_to_tight"] = {j: outcome.impulses[j] / tight.impulses[j] - 1.0 for j in tight.impulses}
@@ -368,11 +368,11 @@ class _Phases:
         self.say(f"wrote {self.json_path}")
         return EXIT_OK
 
-    def stopped(self, stopped: wp.StudyStopped, signals: list[str]) -> int:
+    def stopped(self, stopped: StudyStopped, signals: list[str]) -> int:
         """Save what finished, marked ``incomplete`` (step, cause, time); say where; exit status 1."""
         # why the study stopped (a study's reason, not a run's failure cause: docs/dynamics.md lists those)
         reason = stopped.reason
-        if reason == wp.INTERRUPTED:
+        if reason == INTERRUPTED:
             reason = f"interrupted by the user ({signals[0]})" if signals else "interrupted by the user"
         self.report["incomplete"] = {
             "step": self.step,
@@ -419,7 +419,7 @@ def execute(args: argparse.Namespace) -> int:
         stops.phase = Phase.RUNNING
         try:
             phases.studies(methods, candidates)
-        except wp.StudyStopped as stopped:
+        except StudyStopped as stopped:
             stops.phase = Phase.SAVING
             return phases.stopped(stopped, stops.received)
         stops.phase = Phase.SAVING

@@ -15,10 +15,12 @@ import math
 import tempfile
 import warnings
 from dataclasses import dataclass, field
+from typing import Callable, TypeVar
 from pathlib import Path
 
 import numpy as np
 
+from robot.io.atomic import atomic_write
 from robot.io.results import make_result
 from robot.run import Run, build_run
 from robot.integration.simulation import RECORD_OUTPUT, FailureLimits, SolverOptions, integrate
@@ -160,3 +162,53 @@ def scene_variant(base: str, tables: str, folder: Path | None = None, name: str 
     path = folder / f"{name}.toml"
     path.write_text(f'extends = "{base}"\nname = "{name}"\n{tables}\n', encoding="utf-8")
     return build_run(str(path))
+
+
+#: the cause of a run stopped by Ctrl-C or SIGTERM (robot.integration.event_loop)
+INTERRUPTED = "interrupted"
+
+Result = TypeVar("Result")
+
+
+class StudyStopped(RuntimeError):
+    """A study that stopped before its end: the user stopped it, or a run it depends on failed.
+
+    ``finished``: what the study completed (its rows, or its map filled so far),
+    for the caller to save; ``stopped_run``: the counts of the run it stopped in
+    (``None`` when it stopped between runs); ``reason``: ``"interrupted"`` or
+    why a needed run failed.
+    """
+
+    def __init__(self, message: str, finished=None, stopped_run: dict | None = None, reason: str = INTERRUPTED):
+        super().__init__(message)
+        self.finished, self.stopped_run, self.reason = finished, stopped_run, reason
+
+
+def run_or_stop(simulate_run: Callable[[], Result], label: str, finished=None, stop: Callable[[], bool] | None = None) -> Result:
+    """``simulate_run()`` (an :class:`Outcome` or a dict of counts), unless the user stops the study.
+
+    Raises :class:`StudyStopped` with ``finished`` when ``stop()`` is true before
+    the run (a stop asked for between runs), when the run was interrupted (cause
+    ``interrupted``) or when it let a ``KeyboardInterrupt`` through.
+    """
+    if stop is not None and stop():
+        raise StudyStopped(f"stopped before {label}", finished)
+    try:
+        result = simulate_run()
+    except KeyboardInterrupt:
+        raise StudyStopped(f"{label}: interrupted by the user", finished) from None
+    counts = result.counts() if isinstance(result, Outcome) else result
+    if counts.get("cause") == INTERRUPTED:
+        message = counts.get("message") or f"t={counts.get('t_reached', math.nan):.9g} s: interrupted by the user"
+        raise StudyStopped(f"{label}: {message}", finished, counts)
+    return result
+
+
+def save_png(fig, path, **options) -> None:
+    """Write ``fig`` as a PNG (110 dpi) to ``path`` atomically (a reader never sees half a file), then close it."""
+    import matplotlib.pyplot as plt
+
+    try:
+        atomic_write(path, lambda tmp: fig.savefig(tmp, format="png", dpi=110, **options))
+    finally:
+        plt.close(fig)

@@ -20,7 +20,7 @@ reports them):
 Every run goes through :func:`robot.integration.simulation.integrate`, which never raises on
 divergence: the maps record ``status`` and ``cause``. A map stopped by the user
 (Ctrl-C, or ``stop()`` true between runs) raises
-:class:`robot.analysis.studies.work_precision.StudyStopped` carrying the map
+:class:`robot.analysis.studies.common.StudyStopped` carrying the map
 filled so far.
 """
 
@@ -37,8 +37,7 @@ import numpy as np
 from robot.dynamics.equations import Baumgarte
 from robot.run import Run, build_run
 from robot.integration.simulation import SolverOptions
-from robot.analysis.studies.common import scene_variant, simulate
-from robot.analysis.studies.work_precision import run_or_stop, save_png
+from robot.analysis.studies.common import run_or_stop, save_png, scene_variant, simulate
 
 OK = "ok"
 
@@ -256,7 +255,7 @@ def plot_stiffness(data: dict, path) -> None:
 
     methods = list(data["methods"])
     fig, axes = plt.subplots(1, len(methods) + 1, figsize=(5 * (len(methods) + 1), 4.6))
-    scales, steps = data["scales"], data["steps"]
+    scales = data["scales"]
     seen = set()
     for ax, method in zip(axes, methods):
         for row in data["methods"][method]:

@@ -42,16 +42,15 @@ import math
 import textwrap
 from dataclasses import dataclass, field, replace
 from functools import partial
-from typing import Callable, TypeVar
+from typing import Callable
 
 import numpy as np
 
 from robot.integration import methods as registry
-from robot.io.atomic import atomic_write
 from robot.integration.methods import FIXED_STEP_METHODS, METHODS
 from robot.run import Run
 from robot.integration.simulation import SolverOptions
-from robot.analysis.studies.common import Outcome, simulate
+from robot.analysis.studies.common import Outcome, StudyStopped, run_or_stop, save_png, simulate
 
 #: tolerances (variable step) and step sizes (fixed step) of the default sweep
 TOLERANCES = (1e-4, 1e-5, 1e-6, 1e-7, 1e-8, 1e-9)
@@ -64,46 +63,6 @@ EE_TARGET = 1e-6
 PEAK_TARGET = 1e-2
 #: engineering accuracy: constraint drift (max |Phi|, m)
 DRIFT_TARGET = 1e-6
-#: the cause of a run stopped by Ctrl-C or SIGTERM (robot.integration.event_loop)
-INTERRUPTED = "interrupted"
-
-Result = TypeVar("Result")
-
-
-class StudyStopped(RuntimeError):
-    """A study that stopped before its end: the user stopped it, or a run it depends on failed.
-
-    ``finished``: what the study completed (its rows, or its map filled so far),
-    for the caller to save; ``stopped_run``: the counts of the run it stopped in
-    (``None`` when it stopped between runs); ``reason``: ``"interrupted"`` or
-    why a needed run failed.
-    """
-
-    def __init__(self, message: str, finished=None, stopped_run: dict | None = None, reason: str = INTERRUPTED):
-        super().__init__(message)
-        self.finished, self.stopped_run, self.reason = finished, stopped_run, reason
-
-
-def run_or_stop(simulate_run: Callable[[], Result], label: str, finished=None, stop: Callable[[], bool] | None = None) -> Result:
-    """``simulate_run()`` (an :class:`Outcome` or a dict of counts), unless the user stops the study.
-
-    Raises :class:`StudyStopped` with ``finished`` when ``stop()`` is true before
-    the run (a stop asked for between runs), when the run was interrupted (cause
-    ``interrupted``) or when it let a ``KeyboardInterrupt`` through.
-    """
-    if stop is not None and stop():
-        raise StudyStopped(f"stopped before {label}", finished)
-    try:
-        result = simulate_run()
-    except KeyboardInterrupt:
-        raise StudyStopped(f"{label}: interrupted by the user", finished) from None
-    counts = result.counts() if isinstance(result, Outcome) else result
-    if counts.get("cause") == INTERRUPTED:
-        message = counts.get("message") or f"t={counts.get('t_reached', math.nan):.9g} s: interrupted by the user"
-        raise StudyStopped(f"{label}: {message}", finished, counts)
-    return result
-
-
 @dataclass
 class Reference:
     outcome: Outcome
@@ -216,16 +175,6 @@ def cheapest_accurate(rows: list[dict]) -> dict | None:
     """The run of least CPU time that meets the engineering accuracy."""
     good = [r for r in rows if r["status"] == 0 and r["errors"].get("engineering_accuracy")]
     return min(good, key=lambda r: r["cpu_time"]) if good else None
-
-
-def save_png(fig, path, **options) -> None:
-    """Write ``fig`` as a PNG (110 dpi) to ``path`` atomically (a reader never sees half a file), then close it."""
-    import matplotlib.pyplot as plt
-
-    try:
-        atomic_write(path, lambda tmp: fig.savefig(tmp, format="png", dpi=110, **options))
-    finally:
-        plt.close(fig)
 
 
 def plot(rows: list[dict], ref: dict, t_end: float, path, title: str) -> None:
