@@ -656,7 +656,7 @@ def load_scene(name_or_path: str | Path, overrides: Mapping[str, Any] | None = N
     return scene_from_document(data, path, base_dir)
 
 
-def _solver(solver_table: dict, where: str) -> SolverOptions:
+def solver_options(solver_table: dict, where: str) -> SolverOptions:
     """``[solver]``: a registered method and its tolerances (fixed-step methods need ``first_step``)."""
     w = f"{where} [solver]"
     _unknown(solver_table, _SOLVER_KEYS, w)
@@ -708,7 +708,7 @@ def scene_from_document(data: dict[str, Any], path: Path, base_dir: Path) -> Sce
     name = data.get("name", path.stem)
     if not isinstance(name, str):
         raise SceneError(f"{where}: name={name!r} must be a string", key="name", value=name)
-    solver = _solver(_table(data, "solver", where), where)
+    solver = solver_options(_table(data, "solver", where), where)
     baumgarte = _baumgarte(_table(data, "baumgarte", where), where)
     limits = _limits(_table(data, "limits", where), where)
     materials = _materials(data, where)

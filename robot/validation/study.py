@@ -36,7 +36,7 @@ from robot.io.atomic import atomic_write_text
 from robot.model.platform_kinematics import platform_state
 from robot.run import build_run, run_scene
 from robot.integration.simulation import SolverOptions
-from robot.scene.loader import _solver as scene_solver_table
+from robot.scene.loader import solver_options as scene_solver_table
 from robot.validation import comparison as CMP
 from robot.validation import exudyn_model as EX
 from robot.validation import newton_euler as NE
