@@ -138,6 +138,24 @@ def test_failed_write_leaves_the_previous_file(tmp_path):
     assert path.read_bytes() == b"previous" and sorted(os.listdir(tmp_path)) == ["keep.png"]
 
 
+def test_pyplot_figures_are_released_even_when_the_write_fails(tmp_path):
+    """atomic_write_png(close=True), the one PNG writer of the studies, validation and paper figures."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from robot.io.atomic import atomic_write_png
+
+    figure, _ = plt.subplots(figsize=(2.0, 1.0))
+    png_checks(atomic_write_png(figure, tmp_path / "small.png", dpi=50, close=True), 100, 50)
+    assert not plt.fignum_exists(figure.number)
+    figure, _ = plt.subplots()
+    with pytest.raises(TypeError):
+        atomic_write_png(figure, tmp_path / "bad.png", dpi=50, close=True, no_such_option=1)
+    assert not plt.fignum_exists(figure.number) and sorted(os.listdir(tmp_path)) == ["small.png"]
+
+
 def test_distinct_points_edge_cases():
     assert distinct_points([np.nan, np.nan], 1e-3) == 0
     assert distinct_points([1.0, 1.0 + 1e-4, 2.0], 1e-3) == 2

@@ -171,10 +171,31 @@ def test_claims_study_does_not_save_an_interrupted_run(tmp_path, monkeypatch):
     assert not (tmp_path / "runs").exists()
 
 
+def test_sigterm_stops_a_claims_study_like_ctrl_c(capsys, tmp_path, monkeypatch):
+    """SIGTERM during the runs: the study stops cleanly (exit 130, nothing saved yet) and the handler is restored."""
+    import os
+    import signal
+    import time
+
+    sweep = str(ROOT / "robot" / "sweep" / "examples" / "claims_initial_state.toml")
+
+    def terminated(*args, **kwargs):
+        os.kill(os.getpid(), signal.SIGTERM)
+        time.sleep(5)  # the handler interrupts the sleep
+        raise AssertionError("SIGTERM did not stop the study")
+
+    monkeypatch.setattr(claims_study, "run_study", terminated)
+    before = signal.getsignal(signal.SIGTERM)
+    assert claims_study.main([sweep, "--out", str(tmp_path / "cs")]) == 130
+    assert "interrupted before any run was saved" in capsys.readouterr().err
+    assert signal.getsignal(signal.SIGTERM) is before
+
+
 @pytest.mark.parametrize("saved, code", [(0, EXIT_INTERRUPTED), (2, EXIT_RUN_FAILED)])
 def test_an_interrupted_claims_study_says_what_is_saved(capsys, tmp_path, saved, code):
     for i in range(saved):
         (tmp_path / f"run{i}.npz").write_bytes(b"")
+    (tmp_path / ".run9.npz.k2j4x.npz").write_bytes(b"")  # the temporary file of a write killed by SIGKILL
     assert claims_study.interrupted_exit(tmp_path) == code
     err = capsys.readouterr().err
     assert (f"({saved}) are saved in {tmp_path}" in err) == bool(saved)

@@ -17,7 +17,7 @@ from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 from matplotlib.patches import Circle
 
-from robot.io.atomic import atomic_write
+from robot.io.atomic import atomic_write_png
 from .bifurcation import BifurcationDiagram
 from .errors import AnalysisError, require_array, require_positive
 
@@ -31,7 +31,7 @@ def new_figure(width: float = 6.4, height: float = 4.8) -> Figure:
 
 def save_png(figure: Figure, path: Path | str, *, dpi: int = 100) -> Path:
     """Write ``figure`` as a PNG of (width dpi) x (height dpi) pixels to ``path``, atomically."""
-    return atomic_write(path, lambda tmp: figure.savefig(tmp, format="png", dpi=dpi))
+    return atomic_write_png(figure, path, dpi=dpi)
 
 
 def bifurcation_figure(diagram: BifurcationDiagram, *, marker_size: float = 1.0) -> Figure:

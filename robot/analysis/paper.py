@@ -42,7 +42,7 @@ from typing import Callable
 import numpy as np
 
 from robot.analysis.claims import claims_json, claims_report, evaluate_claims
-from robot.io.atomic import atomic_write, atomic_write_text
+from robot.io.atomic import atomic_write_png, atomic_write_text
 from robot.io.results import SimulationResult, load_result, save_result
 
 SCENES = ("ideal", "compound", "compound_misaligned")
@@ -152,12 +152,8 @@ def _figure(rows: int, cols: int, size=(11, 7)):
 
 
 def _save(fig, path: Path) -> Path:
-    import matplotlib.pyplot as plt
-
     fig.tight_layout()
-    atomic_write(path, lambda tmp: fig.savefig(tmp, dpi=120, format="png"))
-    plt.close(fig)
-    return path
+    return atomic_write_png(fig, path, dpi=120, close=True)
 
 
 UM = 1e6

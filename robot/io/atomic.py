@@ -50,3 +50,18 @@ def atomic_write(path: Path | str, write: Callable[[Path], None]) -> Path:
 def atomic_write_text(path: Path | str, text: str) -> Path:
     """Write ``text`` (UTF-8) to ``path`` atomically."""
     return atomic_write(path, lambda tmp: tmp.write_text(text, encoding="utf-8"))
+
+
+def atomic_write_png(figure, path: Path | str, *, dpi: int, close: bool = False, **options) -> Path:
+    """Write a matplotlib ``figure`` as a PNG of (size x ``dpi``) pixels to ``path`` atomically.
+
+    ``options`` go to ``Figure.savefig`` (e.g. ``bbox_inches``); ``close``: release the figure
+    from pyplot afterwards, whatever happened (figures made with ``pyplot.subplots``).
+    """
+    try:
+        return atomic_write(path, lambda tmp: figure.savefig(tmp, format="png", dpi=dpi, **options))
+    finally:
+        if close:
+            import matplotlib.pyplot as plt  # only a caller that used pyplot asks, so it is loaded already
+
+            plt.close(figure)

@@ -27,6 +27,7 @@ from __future__ import annotations
 import argparse
 import hashlib
 import json
+import signal
 import sys
 import tempfile
 from concurrent.futures import ProcessPoolExecutor
@@ -223,19 +224,27 @@ def main(argv: Sequence[str] | None = None) -> int:
     except RobotError as exc:
         print(f"error: {exc}", file=sys.stderr)
         return EXIT_BAD_INPUT
+    # SIGTERM (a batch system's stop, `kill`) stops the study as Ctrl-C does: the runs saved are kept
+    previous = signal.signal(signal.SIGTERM, _raise_interrupt)
     try:
         entries = run_study(sets, args.out, args.workers)
     except KeyboardInterrupt:
         return interrupted_exit(runs)
+    finally:
+        signal.signal(signal.SIGTERM, previous)
     atomic_write_text(args.out / "claims_study.json", json.dumps(entries, indent=2, default=float))
     atomic_write_text(args.out / "claims_study.md", table_markdown(entries))
     print(table_markdown(entries))
     return EXIT_OK
 
 
+def _raise_interrupt(signum, frame) -> None:
+    raise KeyboardInterrupt
+
+
 def interrupted_exit(runs: Path) -> int:
     """Say where the saved runs are and how to resume; 1 if runs are saved, else 130."""
-    saved = len(list(runs.glob("*.npz")))
+    saved = sum(not path.name.startswith(".") for path in runs.glob("*.npz"))  # not a killed write's temporary file
     if not saved:
         print("interrupted before any run was saved", file=sys.stderr)
         return EXIT_INTERRUPTED

@@ -21,7 +21,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
-from robot.io.atomic import atomic_write  # noqa: E402
+from robot.io.atomic import atomic_write_png  # noqa: E402
 from robot.validation import comparison as CMP  # noqa: E402
 
 STYLE = {
@@ -96,10 +96,7 @@ def _overview(scene: str, series: dict, metrics: dict, out: Path) -> Path:
 
 def _save(fig, path: Path) -> Path:
     """Write ``fig`` to the PNG ``path`` atomically (a reader or a stop never meets half an image) and close it."""
-    try:
-        return atomic_write(path, lambda tmp: fig.savefig(tmp, format="png", dpi=120))
-    finally:
-        plt.close(fig)
+    return atomic_write_png(fig, path, dpi=120, close=True)
 
 
 def _summary_text(metrics: dict) -> str:

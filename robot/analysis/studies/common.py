@@ -20,7 +20,7 @@ from pathlib import Path
 
 import numpy as np
 
-from robot.io.atomic import atomic_write
+from robot.io.atomic import atomic_write_png
 from robot.io.results import make_result
 from robot.run import Run, build_run
 from robot.integration.simulation import RECORD_OUTPUT, FailureLimits, SolverOptions, integrate
@@ -206,9 +206,4 @@ def run_or_stop(simulate_run: Callable[[], Result], label: str, finished=None, s
 
 def save_png(fig, path, **options) -> None:
     """Write ``fig`` as a PNG (110 dpi) to ``path`` atomically (a reader never sees half a file), then close it."""
-    import matplotlib.pyplot as plt
-
-    try:
-        atomic_write(path, lambda tmp: fig.savefig(tmp, format="png", dpi=110, **options))
-    finally:
-        plt.close(fig)
+    atomic_write_png(fig, path, dpi=110, close=True, **options)
