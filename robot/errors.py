@@ -46,6 +46,16 @@ class SceneError(RobotError, ValueError):
     """A scene file is malformed: unknown key, wrong type or value out of range."""
 
 
+class RegistrationError(RobotError, ValueError, TypeError):
+    """An extension (a force element type, an integration method) does not meet its registry's contract.
+
+    Raised when it is registered (or, for a solver given as ``"module:attribute"``,
+    when the method is first looked up), naming the extension and what is missing
+    or wrong. Also a ``ValueError`` and a ``TypeError``: what the registries raised
+    before they checked the contract.
+    """
+
+
 class ResultFileError(RobotError, ValueError):
     """A result file is missing, malformed or from another mechanism."""
 
@@ -77,3 +87,7 @@ class InitialStateWarning(RobotWarning):
 
 class InertiaWarning(RobotWarning):
     """A link's inertia breaks the triangle inequalities: no rigid body has those moments (used as given)."""
+
+
+class ClosureDeclarationWarning(RobotWarning):
+    """A part of a ``<closure>`` declaration is not used as written (the message says what is used instead)."""

@@ -12,7 +12,7 @@ import pytest
 ROOT = Path(__file__).resolve().parents[1]
 
 #: the stages of robot/, in the order data flows (a module may import its own stage and earlier ones)
-STAGES = ["errors", "data", "scene", "model", "dynamics", "integration", "io", "run", "validation", "analysis", "viz", "sweep", "cli", "compat", "__init__"]
+STAGES = ["errors", "extensions", "data", "scene", "model", "dynamics", "integration", "io", "run", "validation", "analysis", "viz", "sweep", "cli", "compat", "__init__"]
 
 #: declarations of later stages that the scene layer validates against: registries and plain data,
 #: none of which imports Pinocchio (test_scene_parsing_imports_no_pinocchio checks that)

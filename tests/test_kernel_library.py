@@ -366,14 +366,18 @@ def _assert_same_arrays(first: Path, second: Path) -> int:
 
 def test_runs_are_the_same_bit_for_bit_and_import_no_numba(library_dir, tmp_path):
     """Spatial RSSR, redundant mixed closures (revolute + spherical clearance), a slider-crank, the
-    4-UPS/RPS with a misaligned revolute joint and a torque-driven free linkage: every output array
+    4-UPS/RPS with a misaligned revolute joint and a torque-driven free linkage (also with scipy's BDF, whose
+    difference Jacobian passes strided states): every output array
     identical; the library run never imports numba."""
+    bdf_scene = tmp_path / "free_bdf.toml"
+    bdf_scene.write_text('extends = "free_two_link_spring"\nname = "free_bdf"\n[solver]\nmethod = "BDF"\n')
     scenes = [
         (str(closure_scene(tmp_path, "rssr_rocker_clearance")), 0.03),
         (str(closure_scene(tmp_path, "mixed_clearance")), 0.03),
         (str(closure_scene(tmp_path, "slider_crank_rod_clearance")), 0.03),
         ("compound_misaligned", 0.05),
         ("free_two_link_spring", 0.05),
+        (str(bdf_scene), 0.02),  # scipy's BDF differences the right-hand side on columns of a 2-D array
     ]
     from_library = _run(library_dir, "1", tmp_path / "library.npz", scenes)
     from_numba = _run(library_dir, "numba", tmp_path / "numba.npz", scenes)

@@ -203,6 +203,17 @@ def test_closure_naming_a_missing_link():
         parse_mechanism(MINIMAL.format(extra=_closure(child="wheel")), is_text=True)
 
 
+def test_a_misspelt_joint_type_is_named_with_its_file(tmp_path):
+    """urdfdom's own message ('not a valid URDF model') names neither the joint nor the type."""
+    path = tmp_path / "typo.urdf"
+    path.write_text(MINIMAL.format(extra="").replace('type="revolute"', 'type="revolut"', 1))
+    with pytest.raises(MechanismFileError, match=r"typo\.urdf: joint 'hinge' has type='revolut'; URDF joint types: revolute, continuous"):
+        parse_mechanism(path)
+    path.write_text(MINIMAL.format(extra=_closure(child="wheel")))
+    with pytest.raises(MechanismFileError, match=r"typo\.urdf: closure 'C': <child link='wheel'>"):
+        parse_mechanism(path)
+
+
 def test_unknown_closure_type():
     with pytest.raises(MechanismFileError, match=r"closure 'C' has type='prismatic'; valid types: spherical, revolute"):
         parse_mechanism(MINIMAL.format(extra=_closure(kind="prismatic")), is_text=True)
@@ -239,8 +250,10 @@ def test_actuated_continuous_joint_is_rejected_with_advice():
 
 
 def test_bad_clearance_choices():
-    with pytest.raises(ClearanceChoiceError, match=r"clearance joint 'R7' is neither a joint nor a closure of 'ups_rps'"):
+    with pytest.raises(ClearanceChoiceError, match=r"clearance joint 'R7' is neither a joint nor a closure of 'ups_rps'") as refused:
         build_mechanism(URDF, clearance="R7")
+    offered = str(refused.value).split("joints that can carry clearance: ")[1].split(", ")
+    assert "S1" in offered and not {"P1", "P5"} & set(offered)  # actuated joints cannot carry clearance: not offered
     # prismatic joints can carry clearance (translational types), but P5 is actuated
     with pytest.raises(ClearanceChoiceError, match=r"clearance joint 'P5' is actuated; an actuated joint cannot carry clearance"):
         build_mechanism(URDF, clearance="P5")

@@ -20,6 +20,7 @@ import math
 import warnings
 import xml.etree.ElementTree as ET
 from pathlib import Path
+from types import SimpleNamespace
 
 import numpy as np
 import pinocchio as pin
@@ -209,7 +210,7 @@ def test_driven_crank_torque_matches_lagrange_closed_form(tmp_path, mechanism):
 # --------------------------------------------------------------------------- detection
 
 
-def bennett_urdf(theta1: float = 1.0, a: float = 0.1, alpha_deg: float = 30.0, beta_deg: float = 60.0) -> str:
+def bennett_urdf(theta1: float = 1.0, a: float = 0.1, alpha_deg: float = 30.0, beta_deg: float = 60.0, baked: bool = True) -> str:
     """A Bennett linkage: four revolutes, opposite links equal (a, alpha) and (b, beta), a / sin(alpha) = b / sin(beta).
 
     Denavit-Hartenberg chain ``T_i = Rz(theta_i) Tx(a_i) Rx(alpha_i)``; joints 1-3 are tree joints whose
@@ -221,6 +222,8 @@ def bennett_urdf(theta1: float = 1.0, a: float = 0.1, alpha_deg: float = 30.0, b
     b = a * math.sin(beta) / math.sin(alpha)
     theta2 = 2.0 * math.atan(math.sin((beta + alpha) / 2) / math.sin((beta - alpha) / 2) / math.tan(theta1 / 2))
     theta3 = -theta1
+    if not baked:  # joint origins without the assembled angles: at q = 0 the closure's axes are not parallel
+        theta1 = theta2 = theta3 = 0.0
 
     def origin(length, twist, angle):
         rpy = [float(x) for x in pin.rpy.matrixToRpy(pin.utils.rotate("x", twist) @ pin.utils.rotate("z", angle))]
@@ -319,6 +322,82 @@ def test_bennett_linkage_moves_with_one_degree_of_freedom():
         q = assembly.q
         assert assembly.residual_norm < 1e-13
         assert K.mobility(C.constraint_set(mechanism, driven=False), q) == 1
+
+
+def _bennett_scene(tmp_path: Path, actuation: str, extra: str = "") -> Path:
+    """A Bennett linkage of other proportions (a = 0.12 m, twists 40 and 70 deg) with gravity, integrated by RK45:
+    its trial stages leave the closure manifold by up to ~1e-5 of a row's scale."""
+    urdf = tmp_path / "bennett.urdf"
+    urdf.write_text(bennett_urdf(theta1=1.0, a=0.12, alpha_deg=40.0, beta_deg=70.0))
+    path = tmp_path / "bennett.toml"
+    path.write_text(
+        f'name = "bennett"\nmechanism = "{urdf.as_posix()}"\nend_effector = "l2"\nduration = 0.1\ngravity = [0.0, 0.0, -9.81]\n'
+        f"{actuation}\n[solver]\nmethod = \"RK45\"\nrtol = 1e-9\natol = 1e-11\nmax_step = 1e-3\n"
+        f'[output]\nprecision = "float64"\n{extra}'
+    )
+    return path
+
+
+def _bennett_angles_error(result) -> float:
+    """Largest deviation of the joint angles from Bennett's closed form (theta3 = -theta1, the theta2 relation)."""
+    alpha, beta = math.radians(40.0), math.radians(70.0)
+    ratio = math.sin((beta + alpha) / 2) / math.sin((beta - alpha) / 2)
+    q = result["q"]  # offsets from the assembled angles at theta1 = 1
+    theta1 = 1.0 + q[:, 0]
+    theta2_at_1 = 2.0 * math.atan(ratio / math.tan(0.5))
+    theta2 = 2.0 * np.arctan(ratio / np.tan(theta1 / 2))
+    return float(max(np.abs(q[:, 2] + q[:, 0]).max(), np.abs(q[:, 1] - (theta2 - theta2_at_1)).max()))
+
+
+@pytest.mark.parametrize(
+    "actuation",
+    ['[trajectory]\ntype = "joints"\nj1 = { function = "constant_rate", offset = 0.0, rate = 10.0 }\n', '[actuators]\nj1 = { mode = "none" }\n[initial]\nvelocities = { j1 = 15.0 }\n'],
+    ids=["driven_10_rad_s", "passive_15_rad_s"],
+)
+def test_a_fast_bennett_linkage_keeps_its_dependent_rows_out_off_the_manifold(tmp_path, actuation):
+    """Off the manifold (RK45's trial stages) the third closure row of a Bennett linkage looked independent (pivots
+    1e-10 to 1e-5), and the re-detection kept it: three closure rows and the driver on three velocities, a singular
+    system, the crank off its drive and the run stalled at 1e-4 s; the passive linkage lost energy. Now the closure
+    rows kept never outnumber nv less the drivers and a dropped row comes back only beyond 1e-3 (redundancy.closure_rank):
+    the motion is Bennett's closed form, the closure holds and the energy balance closes."""
+    run, result = _run(_bennett_scene(tmp_path, actuation))
+    assert result.success, result.message
+    assert result.counts["n_steps"] < 2000  # a stalled run took 40,000 steps for 1e-4 s
+    assert np.abs(result["constraint_residual"]).max() < 1e-9  # measured 1.4e-12 (driven), 9e-14 (passive)
+    assert _bennett_angles_error(result) < 1e-9  # measured 3e-12
+    energy = result["kinetic_energy"] + result["potential_energy"]
+    balance = energy - energy[0] - result["actuator_work"]
+    assert np.abs(balance).max() < 1e-9 * np.abs(energy).max()  # measured 5e-12 relative (driven), 2e-15 (passive)
+
+
+def test_a_dropped_row_comes_back_only_when_it_is_clearly_independent():
+    """closure_rank: the tolerance's rank, capped by nv less the drivers, and above a previous selection's count only
+    for pivots beyond RANK_GROWTH_TOLERANCE (a mechanism leaving a singular configuration)."""
+    pivots = np.array([1.0, 0.47, 3e-6])
+    previous = SimpleNamespace(n_closure_kept=2)
+    assert R.closure_rank(pivots, 1e-9, n_velocities=3, n_driving=0, previous=None) == 3
+    assert R.closure_rank(pivots, 1e-9, n_velocities=3, n_driving=1, previous=None) == 2  # no more than nv rows
+    assert R.closure_rank(pivots, 1e-9, n_velocities=3, n_driving=0, previous=previous) == 2  # drift, not a new row
+    assert R.closure_rank(np.array([1.0, 0.47, 0.02]), 1e-9, n_velocities=3, n_driving=0, previous=previous) == 3
+    assert R.closure_rank(np.array([1.0, 1e-12]), 1e-9, n_velocities=3, n_driving=0, previous=previous) == 1  # rank lost
+
+
+def test_a_revolute_closures_ignored_child_orientation_is_reported():
+    """The child-side axis of a revolute closure is the parent's at q = 0 (docs/kinematics.md): a declared child rpy
+    that disagrees is named in a warning, and the assembly's failure says where the axis comes from; a declared rpy
+    that agrees (the Bennett linkage assembled at q = 0) says nothing."""
+    import robot.errors as E
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", E.ClosureDeclarationWarning)
+        build_mechanism(parse_mechanism(bennett_urdf(), is_text=True))
+    with pytest.warns(E.ClosureDeclarationWarning, match=r"closure 'J4': the child frame's rpy .* is not used"):
+        mechanism = build_mechanism(parse_mechanism(bennett_urdf(alpha_deg=40.0, beta_deg=70.0, baked=False), is_text=True))
+    with pytest.raises(E.UnreachablePoseError, match="cannot be met from the initial guess"):
+        K.assemble(C.constraint_set(mechanism, driven=False), pin.neutral(mechanism.model))
+    from robot.model.initial_state import _revolute_closure_hint
+
+    assert "J4 take their child-side axis from the parent's at the neutral configuration" in _revolute_closure_hint(mechanism)
 
 
 # --------------------------------------------------------------------------- exact dynamics at a state

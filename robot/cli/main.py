@@ -68,6 +68,7 @@ def main(argv: list[str] | None = None) -> int:
     """Run ``clearance ARGV``; return the exit code (never raises for a user error)."""
     from clearance_contact.errors import ContactError
     from robot.errors import RobotError
+    from robot.extensions import load_extensions
 
     argv = sys.argv[1:] if argv is None else list(argv)
     command = _command_of(argv)
@@ -81,6 +82,11 @@ def main(argv: list[str] | None = None) -> int:
         except KeyboardInterrupt:
             print("interrupted", file=sys.stderr)
             return EXIT_INTERRUPTED
+    try:  # before parsing: a command's options may list registered names (integrators, analyses)
+        load_extensions()
+    except RobotError as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return EXIT_BAD_INPUT
     parser = build_parser(command)
     try:
         args = parser.parse_args(argv)

@@ -616,7 +616,7 @@ def solve_kkt(dynamics: DynamicsModel, workspace: DynamicsWorkspace, tau: np.nda
     qdd = pin.forwardDynamics(model, data, tau, phi_q[rows.independent], drift[rows.independent])
     if not rows.consistent(phi_q, drift, qdd):
         workspace.rank_checks += 1
-        fresh = R.detect(dynamics.constraints, model, data, phi_q)
+        fresh = R.detect(dynamics.constraints, model, data, phi_q, previous=rows)
         if not fresh.same_rows(rows):
             workspace.rows = fresh
             independent = fresh.independent
@@ -701,6 +701,8 @@ def _compiled_state_derivative(
 ) -> np.ndarray:
     """:func:`state_derivative` through :mod:`robot.dynamics.rhs_kernels` (same equations)."""
     model, data, nq = compiled.model, workspace.data, compiled.nq
+    if not y.flags.c_contiguous:  # a column of a 2-D array (scipy's difference Jacobians): the kernels take contiguous v
+        y = np.ascontiguousarray(y)
     q = pin.normalize(model, y[:nq])  # a copy with unit quaternions
     v = y[nq : compiled.nq_nv]
     coefficients, x = workspace.drive.polynomial(t)

@@ -87,7 +87,10 @@ class LagrangeSystem:
         return self._probe_workspace
 
     def replica(self) -> "LagrangeSystem":
-        return LagrangeSystem(self.dynamics, self.penetration_bounds)
+        replica = LagrangeSystem(self.dynamics, self.penetration_bounds)
+        # the rows in use (an immutable selection): a fresh detection off the manifold could keep a dependent one
+        replica.workspace.rows = self.workspace.rows
+        return replica
 
     def derivative(self, t: float, y: np.ndarray, onset: np.ndarray) -> np.ndarray:
         return D.state_derivative(self.dynamics, self.workspace, t, y, onset)

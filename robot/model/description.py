@@ -120,8 +120,8 @@ def _vector(element: ET.Element, attribute: str, where: str, default: str = "0 0
     return values  # type: ignore[return-value]
 
 
-def _frame(element: ET.Element | None, role: str, closure: str, links: set[str]) -> FrameOnLink:
-    where = f"closure {closure!r}"
+def _frame(element: ET.Element | None, role: str, closure: str, links: set[str], label: str) -> FrameOnLink:
+    where = f"{label}: closure {closure!r}"
     if element is None:
         raise MechanismFileError(f"{where}: missing <{role} link=... xyz=... rpy=...> element")
     link = element.get("link")
@@ -293,6 +293,10 @@ def _limits(element: ET.Element, name: str, kind: str, label: str) -> tuple[floa
     return (None if np.isnan(lower) else lower), (None if np.isnan(upper) else upper)
 
 
+#: the joint types of the URDF specification (what urdfdom, and so Pinocchio, accepts)
+URDF_JOINT_TYPES = ("revolute", "continuous", "prismatic", "fixed", "floating", "planar")
+
+
 def _joints(root: ET.Element, link_set: set[str], label: str) -> dict[str, JointDeclaration]:
     joints: dict[str, JointDeclaration] = {}
     for element in root.findall("joint"):
@@ -304,6 +308,8 @@ def _joints(root: ET.Element, link_set: set[str], label: str) -> dict[str, Joint
             raise MechanismFileError(f"{label}: joint {name!r} needs name, type, <parent> and <child>")
         if name in joints:
             raise MechanismFileError(f"{label}: duplicate joint name {name!r}")
+        if kind not in URDF_JOINT_TYPES:
+            raise MechanismFileError(f"{label}: joint {name!r} has type={kind!r}; URDF joint types: {', '.join(URDF_JOINT_TYPES)}")
         for role, link in (("parent", parent.get("link")), ("child", child.get("link"))):
             if link not in link_set:
                 raise MechanismFileError(f"{label}: joint {name!r} {role} link {link!r} is not defined")
@@ -337,8 +343,8 @@ def _closures(root: ET.Element, joints: dict, link_set: set[str], label: str) ->
             raise MechanismFileError(f"{label}: closure name {name!r} is already used by a joint or closure")
         if kind not in CLOSURE_TYPES:
             raise MechanismFileError(f"{label}: closure {name!r} has type={kind!r}; valid types: {', '.join(CLOSURE_TYPES)}")
-        parent = _frame(element.find("parent"), "parent", name, link_set)
-        child = _frame(element.find("child"), "child", name, link_set)
+        parent = _frame(element.find("parent"), "parent", name, link_set, label)
+        child = _frame(element.find("child"), "child", name, link_set, label)
         axis = _closure_axis(element, name, label) if kind == "revolute" else None
         closures.append(ClosureDeclaration(name, kind, parent, child, axis))
     return closures

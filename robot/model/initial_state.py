@@ -129,7 +129,7 @@ def _assembled(
         holding = ", ".join(held.names) or "none (they are only a guess)"
         raise InitialStateError(
             f"[initial] positions {{{values}}}: the closures cannot be assembled (held exactly: {holding}): {exc}; "
-            "give values inside the mechanism's reach"
+            f"give values inside the mechanism's reach{_revolute_closure_hint(mechanism)}"
         ) from None
     _report_moved(given_q, q0[given_q.q_index], "positions")
     if not given_v.names:
@@ -218,3 +218,14 @@ def _report_moved(given: HeldCoordinates, result: np.ndarray, key: str) -> None:
             InitialStateWarning,
             stacklevel=3,
         )
+
+
+def _revolute_closure_hint(mechanism) -> str:
+    """For mechanisms with revolute closures: where their child-side axis comes from (a cause of closures that never meet)."""
+    names = [c.name for c in mechanism.description.closures if c.kind == "revolute"]
+    if not names:
+        return ""
+    return (
+        f"; revolute closure(s) {', '.join(names)} take their child-side axis from the parent's at the neutral "
+        "configuration (docs/kinematics.md, section 2): if the axes are not parallel at q = 0, no position assembles them"
+    )

@@ -110,10 +110,10 @@ def assemble(
             phi_q = np.vstack([phi_q, unit_rows])
         step, *_ = np.linalg.lstsq(phi_q, -phi, rcond=None)
         q = pin.integrate(model, q, step)
+    target = "the closures" if drive is None or not len(drive) else f"the actuator coordinates {np.round(drive, 6).tolist()} (m or rad)"
     raise UnreachablePoseError(
         f"assembly did not converge: constraint residual {norm:.3e} after {max_iterations} Newton iterations "
-        f"(tolerance {tolerance:.1e}); the actuator lengths {None if drive is None else np.round(drive, 6).tolist()} "
-        "are not reachable from the initial guess"
+        f"(tolerance {tolerance:.1e}); {target} cannot be met from the initial guess"
     )
 
 

@@ -27,6 +27,7 @@ bearing on the limb for R1, as in the seed paper's ADAMS model).
 
 from __future__ import annotations
 
+import warnings
 import xml.etree.ElementTree as ET
 from dataclasses import dataclass
 from pathlib import Path
@@ -36,7 +37,7 @@ import numpy as np
 import pinocchio as pin
 
 from robot.model.description import CLEARANCE_TREE_KINDS, ClosureDeclaration, FrameOnLink, MechanismDescription, parse_mechanism
-from robot.errors import ClearanceChoiceError, MechanismFileError
+from robot.errors import ClearanceChoiceError, ClosureDeclarationWarning, MechanismFileError
 
 CLEARANCE_SIDES = ("child", "parent")
 
@@ -167,8 +168,29 @@ def _closure_frames(model: pin.Model, declaration: ClosureDeclaration, names: tu
         pin.forwardKinematics(model, data, pin.neutral(model))
         world_a = data.oMi[joint_a] * placement_a
         world_b = data.oMi[joint_b] * placement_b
-        placement_b = placement_b * pin.SE3(world_b.rotation.T @ world_a.rotation, np.zeros(3))
+        derived = placement_b * pin.SE3(world_b.rotation.T @ world_a.rotation, np.zeros(3))
+        _check_child_axis(declaration, placement_b.rotation[:, 2], derived.rotation[:, 2])
+        placement_b = derived
     return _add_frame(model, names[0], joint_a, placement_a), _add_frame(model, names[1], joint_b, placement_b)
+
+
+def _check_child_axis(declaration: ClosureDeclaration, declared_axis: np.ndarray, used_axis: np.ndarray) -> None:
+    """Warn when a revolute closure's child frame declares an orientation (non-zero rpy) whose z is not the axis used.
+
+    The child-side axis is the parent's axis at the neutral configuration (docs/kinematics.md, section 2); a
+    declared child orientation is not used, and if it disagrees the closure may not assemble where the file meant.
+    """
+    if not any(declaration.child.rpy) or np.linalg.norm(np.cross(declared_axis, used_axis)) < 1e-9:
+        return
+    warnings.warn(
+        f"closure {declaration.name!r}: the child frame's rpy {tuple(declaration.child.rpy)} puts its z axis at "
+        f"{np.round(declared_axis, 6).tolist()} in link {declaration.child.link!r}, but a revolute closure's child-side "
+        f"axis is the parent's axis at the neutral configuration, {np.round(used_axis, 6).tolist()} there (docs/kinematics.md, "
+        "section 2): the declared rpy is not used. Write the tree joints' origins so that the two axes are parallel "
+        "at q = 0 (the positions need not meet there)",
+        ClosureDeclarationWarning,
+        stacklevel=4,
+    )
 
 
 STANDARD_GRAVITY = (0.0, 0.0, -9.81)
@@ -231,10 +253,10 @@ def _clearance_tree_joints(description: MechanismDescription, choice: Mapping[st
             continue
         joint = description.joints.get(name)
         if joint is None:
-            valid = sorted([n for n, j in description.joints.items() if j.kind in CLEARANCE_TREE_KINDS] + list(closure_names))
+            tree = [n for n, j in description.joints.items() if j.kind in CLEARANCE_TREE_KINDS and n not in description.actuated_joints]
             raise ClearanceChoiceError(
                 f"clearance joint {name!r} is neither a joint nor a closure of {description.name!r}; "
-                f"joints that can carry clearance: {', '.join(valid)}"
+                f"joints that can carry clearance: {', '.join(sorted(tree + list(closure_names))) or 'none'}"
             )
         if joint.kind not in CLEARANCE_TREE_KINDS:
             raise ClearanceChoiceError(

@@ -52,6 +52,22 @@ independent (the rank changes at a singular configuration) fails it at once,
 and the selection is detected again (one pivoted QR: ~20 us for 5 x 3) and the
 system solved again.
 
+**Off the manifold.** Between the accepted states an integrator evaluates trial
+states that violate the closures by up to the step's error (Baumgarte pulls them
+back over time), and there a dependent row looks independent by about that
+violation relative to the mechanism's size: a Bennett linkage driven at 10 rad/s
+with RK45 showed pivots of 1e-10 to 1e-5 on its third closure row. Keeping such a
+row makes the reduced system (nearly) singular: three closure rows and the driver
+on three velocities gave garbage accelerations and a stalled run. So
+(:func:`closure_rank`) the closure rows kept never outnumber ``nv`` less the
+driving rows, and once a row is dropped, a later detection takes it back only if
+its relative pivot exceeds ``RANK_GROWTH_TOLERANCE = 1e-3``: the failure limits
+stop a run long before a drift makes that much (``max_residual`` 1e-4 m on a
+mechanism of 0.1 m is 1e-3), while a mechanism that leaves a singular
+configuration passes it on its way. A genuinely independent row left out for
+longer shows as a failed check of the dropped rows (the accelerations then do
+not meet it) and as constraint drift, which the drift limit reports.
+
 **Multipliers.** ``lambda_I`` of the reduced system gives the generalized
 constraint force ``Phi_I^T lambda_I``; over the redundant set any ``lambda``
 with ``Phi_q^T lambda = Phi_I^T lambda_I`` is a solution (statically
@@ -83,6 +99,8 @@ from robot.model.pinocchio_arrays import frame_jacobian
 REDUNDANCY_TOLERANCE = 1e-9
 #: relative tolerance of the dropped equations' check after each reduced solve
 CHECK_TOLERANCE = 1e-6
+#: relative pivot a dropped closure row needs before a later detection takes it back (module docstring, "Off the manifold")
+RANK_GROWTH_TOLERANCE = 1e-3
 
 
 @dataclass(frozen=True, eq=False)
@@ -137,15 +155,37 @@ def row_scales(constraints: C.ConstraintSet, model: pin.Model, data: pin.Data, p
     return scales
 
 
-def independent_rows(scaled: np.ndarray, tolerance: float = REDUNDANCY_TOLERANCE) -> np.ndarray:
-    """Indices (increasing) of rows of ``scaled`` spanning its row space: pivoted QR of ``scaled^T``."""
+def ranked_rows(scaled: np.ndarray, tolerance: float = REDUNDANCY_TOLERANCE) -> tuple[np.ndarray, np.ndarray]:
+    """Rows of ``scaled`` in the pivoted QR's order (most independent first) and their relative pivots ``|R_kk| / |R_11|``.
+
+    Pivoted QR of ``scaled^T``; rows of norm ``<= tolerance`` are left out. At most
+    ``min(rows, columns)`` rows are ranked (no more can be independent).
+    """
     nonzero = np.flatnonzero(np.linalg.norm(scaled, axis=1) > tolerance) if scaled.size else np.zeros(0, dtype=int)
     if nonzero.size == 0:
-        return nonzero
+        return nonzero, np.zeros(0)
     triangle, pivots = pivoted_qr(scaled[nonzero].T)
     diagonal = np.abs(np.diag(triangle))
-    rank = int(np.sum(diagonal > tolerance * diagonal[0]))
-    return np.sort(nonzero[pivots[:rank]])
+    return nonzero[pivots[: diagonal.size]], diagonal / diagonal[0]
+
+
+def independent_rows(scaled: np.ndarray, tolerance: float = REDUNDANCY_TOLERANCE) -> np.ndarray:
+    """Indices (increasing) of rows of ``scaled`` spanning its row space: pivoted QR of ``scaled^T``."""
+    rows, pivots = ranked_rows(scaled, tolerance)
+    return np.sort(rows[: int(np.sum(pivots > tolerance))])
+
+
+def closure_rank(pivots: np.ndarray, tolerance: float, n_velocities: int, n_driving: int, previous: "RowSelection | None") -> int:
+    """How many closure rows to keep, from their relative pivots (module docstring, "Off the manifold").
+
+    The rows above ``tolerance``, but never more than ``n_velocities - n_driving`` (the drivers are independent of
+    the closures, and no more than ``nv`` rows can be); with a ``previous`` selection, more closure rows than it kept
+    only if the extra ones are independent beyond :data:`RANK_GROWTH_TOLERANCE`.
+    """
+    rank = min(int(np.sum(pivots > tolerance)), max(n_velocities - n_driving, 0))
+    if previous is not None and rank > previous.n_closure_kept:
+        rank = max(previous.n_closure_kept, min(rank, int(np.sum(pivots > RANK_GROWTH_TOLERANCE))))
+    return rank
 
 
 def detect(
@@ -155,19 +195,23 @@ def detect(
     phi_q: np.ndarray,
     tolerance: float = REDUNDANCY_TOLERANCE,
     warn: bool = True,
+    previous: RowSelection | None = None,
 ) -> RowSelection:
     """The :class:`RowSelection` of ``Phi_q`` at the configuration on ``data`` (joint Jacobians and frame placements).
 
-    Raises :class:`SingularConfigurationError` when the driving rows depend on the
-    closures; warns (:class:`RedundantConstraintWarning`) when closure rows are redundant.
+    ``previous``: the selection in use, when its dropped rows failed their check
+    (:func:`closure_rank`). Raises :class:`SingularConfigurationError` when the driving
+    rows depend on the closures; warns (:class:`RedundantConstraintWarning`) when closure
+    rows are redundant.
     """
     scales = row_scales(constraints, model, data, phi_q)
     n_closure = constraints.n_closure_rows
     safe = np.where(scales > 0.0, scales, 1.0)
     scaled = phi_q / safe[:, None]
     scaled[scales == 0.0] = 0.0  # a closure between two bodies that cannot move relative to each other
-    kept = independent_rows(scaled[:n_closure], tolerance)
     driving = np.arange(n_closure, constraints.n_rows)
+    ranked, pivots = ranked_rows(scaled[:n_closure], tolerance)
+    kept = np.sort(ranked[: closure_rank(pivots, tolerance, model.nv, driving.size, previous)])
     if driving.size:
         stacked = np.vstack([scaled[kept], scaled[driving]])
         singular_values = np.linalg.svd(stacked, compute_uv=False)
