@@ -44,6 +44,23 @@ def test_amplitude_spectrum_recovers_the_sines():
     assert np.max(amplitude[~lines]) < 1e-5
 
 
+def test_a_large_mean_does_not_leak_into_the_low_bins():
+    """A slider's position: mean 0.137 m, a 0.05 m line at 83.3 Hz. Windowed as it is, Hann spreads the mean into
+    bin 1 at the mean's own amplitude (a false 20.8 Hz line larger than the real one); the mean is removed first."""
+    t = non_uniform_grid(0.048, 6000, seed=9)
+    f_drive = 2 / 0.024  # two drive periods in the window
+    position = 0.137 + 0.05 * np.cos(2 * np.pi * f_drive * t)
+    out = amplitude_spectrum(t, position, n_samples=256)
+    amplitude, frequency = out["amplitude"], out["frequency"]
+    assert amplitude[0] == pytest.approx(0.137, rel=1e-6)  # the mean, as the DC amplitude
+    assert frequency[int(np.argmax(amplitude[1:])) + 1] == pytest.approx(f_drive)
+    assert amplitude[1] < 1e-6 and amplitude[int(round(f_drive / float(out["resolution"])))] == pytest.approx(0.05, rel=1e-5)
+    windowed_as_is = amplitude_spectrum(t, position, n_samples=256, remove_mean=False)["amplitude"]
+    assert windowed_as_is[1] == pytest.approx(0.137, rel=1e-3)  # the leak the default removes
+    with pytest.raises(AnalysisError, match="remove_mean='yes' must be true or false"):
+        amplitude_spectrum(t, position, remove_mean="yes")
+
+
 def test_amplitude_between_bins_within_the_hann_scalloping_loss():
     t = np.linspace(0.0, DURATION, 8001)
     f = 10.125  # between bins (bin spacing 0.25 Hz): half-way is the worst case, 1.42 dB (Harris 1978)

@@ -7,6 +7,7 @@ ideal scene over a few milliseconds.
 from __future__ import annotations
 
 import importlib
+import re
 import json
 import os
 import signal
@@ -55,6 +56,15 @@ def test_every_command_has_help_with_examples_and_exit_codes(capsys, command):
     code, out, err = run_cli(capsys, command, "--help")
     assert code == EXIT_OK, err
     assert "examples:" in out and "exit status:" in out and "2    bad input" in out
+
+
+def test_run_help_names_every_shipped_scene(capsys):
+    from robot.scene.loader import shipped_scenes
+
+    code, out, _ = run_cli(capsys, "run", "--help")
+    assert code == EXIT_OK
+    listed = " ".join(out.split())  # argparse rewraps the text
+    assert [name for name in shipped_scenes() if not re.search(rf"(?<!\w){name}(?!\w)", listed)] == []
 
 
 def test_top_level_help_lists_every_command(capsys):

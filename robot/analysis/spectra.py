@@ -16,6 +16,10 @@ samples), window w_k (periodic Hann by default),
 A sine of amplitude A at a bin frequency f_j gives A_j = A exactly (coherent
 gain correction); between bins the Hann window loses at most 1.42 dB (15 %,
 Harris 1978 Table I), so take ``t_e - t_s`` a whole number of drive periods.
+With ``remove_mean`` (the default) the samples' mean m is subtracted before the
+window and reported as ``A_0 = |m|``: a window spreads a constant over its main
+lobe (Hann: a line of amplitude m in bin 1 too), which would hide or imitate a
+low-frequency line of a signal with a large mean (a position, a preloaded force).
 
 Power spectral density (Welch, "The use of fast Fourier transform for the
 estimation of power spectra", IEEE Trans. Audio Electroacoust. 15 (1967) 70-73;
@@ -66,17 +70,29 @@ def _window(name: str, length: int) -> np.ndarray:
     source="Harris, Proc. IEEE 66 (1978) 51-83",
 )
 def amplitude_spectrum(
-    t, signal, *, n_samples: int = 1024, t_start: float | None = None, t_end: float | None = None, window_name: str = "hann"
+    t,
+    signal,
+    *,
+    n_samples: int = 1024,
+    t_start: float | None = None,
+    t_end: float | None = None,
+    window_name: str = "hann",
+    remove_mean: bool = True,
 ) -> dict[str, np.ndarray]:
     """One-sided amplitude spectrum of ``signal`` over ``[t_start, t_end)`` (module docstring)."""
     n = require_count("n_samples", n_samples, minimum=4)
+    if not isinstance(remove_mean, (bool, np.bool_)):
+        raise AnalysisError(f"remove_mean={remove_mean!r} must be true or false", key="remove_mean", value=remove_mean)
     times, values = time_series(t, signal, ndim=(1,))
     start, end = window(times, t_start, t_end)
     sample_rate = n / (end - start)
     samples = cubic_interpolant(times, values)(uniform_grid(start, end, sample_rate, n_samples=n))
+    mean = float(np.mean(samples)) if remove_mean else 0.0
     weights = _window(window_name, n)
-    amplitude = np.abs(np.fft.rfft(weights * samples)) / weights.sum()
+    amplitude = np.abs(np.fft.rfft(weights * (samples - mean))) / weights.sum()
     amplitude[1 : (n + 1) // 2] *= 2.0  # one-sided: fold negative frequencies (not DC, not Nyquist)
+    if remove_mean:
+        amplitude[0] = abs(mean)
     return {
         "frequency": np.fft.rfftfreq(n, d=1.0 / sample_rate),
         "amplitude": amplitude,

@@ -5,8 +5,11 @@ examples:
   clearance run --scene compound --t-end 0.2 --out /tmp/r   # shorter run elsewhere
   clearance run --scene ./my_scene.toml --check             # validate the scene and build its model only
 
-Shipped scenes: ideal, spherical, revolute, compound, compound_misaligned; a
-scene file of your own works by path (robot/scene/loader.py documents the keys).
+Shipped scenes (robot/scene/scenes/, docs/scenes.md): ideal, spherical, revolute,
+compound, compound_misaligned (the 4-UPS/RPS of the seed paper); four_bar,
+four_bar_revolute, slider_crank_revolute, slider_crank_translational (planar
+linkages with clearance); free_two_link_spring (a torque-driven arm with force
+elements). A scene file of your own works by path (docs/scenes.md documents the keys).
 Ctrl-C or SIGTERM stops the integration and saves the partial result.
 The output folder is checked writable before the run; if the write still fails,
 the result goes to a temporary folder named in the message.
