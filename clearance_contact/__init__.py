@@ -10,12 +10,14 @@ either the same code runs as plain Python.
 * :mod:`.kernel_mode`: how the kernels run (the kernel library, numba's JIT, plain Python);
 * :mod:`.kernel_library`: the kernels compiled ahead of time, loaded without numba;
 
-* :mod:`.errors`: ``ContactError``, ``ContactParameterError``;
+* :mod:`.errors`: ``ContactError``, ``ContactLawError``, ``ContactParameterError``;
 * :mod:`.materials`: ``Material`` and Hertz-type stiffnesses;
 * :mod:`.normal_force`: Lankarani-Nikravesh law, ``ONSET_RATE_FLOOR``, Hertz impact peak;
-* :mod:`.dissipation`: normal dissipation models (L-N, Hunt-Crossley, Gonthier, Flores, Hu-Guo);
+* :mod:`.dissipation`: normal dissipation models (L-N, Hunt-Crossley, Gonthier, Flores, Hu-Guo),
+  ``register_dissipation_model``, ``DISSIPATION_MODELS`` (read-only);
 * :mod:`.radial_laws`, :mod:`.radial_profile`: the revolute joint's radial laws and exact-profile wrench;
-* :mod:`.friction`: Brown-McPhee, Coulomb, no friction;
+* :mod:`.friction`: Brown-McPhee, Coulomb, no friction; the registry of laws by name
+  (``register_friction_law``, ``FrictionKey``, ``friction_law_from_scene``);
 * :mod:`.result`: ``JointContact``;
 * :mod:`.joint`: ``ClearanceJoint`` (base class of the joint types), ``Shape``, ``output_layout``;
 * :mod:`.registry`: ``register_joint_type``, ``joint_type``, ``joint_types``;
@@ -34,10 +36,15 @@ from .lazy import lazy_exports
 _PUBLIC = {
     "ClearanceMechanismsError": ".errors",
     "ContactError": ".errors",
+    "ContactLawError": ".errors",
     "ContactParameterError": ".errors",
     "BrownMcPheeFriction": ".friction",
     "CoulombFriction": ".friction",
+    "FrictionKey": ".friction",
     "FrictionLaw": ".friction",
+    "friction_law_from_scene": ".friction",
+    "friction_law_names": ".friction",
+    "register_friction_law": ".friction",
     "NoFriction": ".friction",
     "ScalarFrictionLaw": ".friction",
     "STEEL": ".materials",
@@ -55,6 +62,7 @@ _PUBLIC = {
     "lankarani_nikravesh": ".normal_force",
     "validate_normal_law": ".normal_force",
     "DISSIPATION_MODELS": ".dissipation",
+    "register_dissipation_model": ".dissipation",
     "rebound_ratio": ".dissipation",
     "RADIAL_LAWS": ".radial_laws",
     "KIND_LINE": ".result",

@@ -34,14 +34,26 @@ against the c_e asked for (measured by integrating impacts: ``clearance contact-
 Encoding for the compiled kernels (like the friction laws): a code and
 ``DISSIPATION_PARAMETERS`` floats, dispatched by :func:`encoded_damping_factor`;
 ``DISSIPATION_HYSTERESIS`` (chi, 0) covers all the models above, so a new model of this
-form is one entry of :data:`DISSIPATION_MODELS`; a model of another form adds a code and
-a branch there, and nothing in the joints' geometry.
+form is one call of :func:`register_dissipation_model`; a model of another form adds a code
+and a branch there, and nothing in the joints' geometry.
+
+Registry: :func:`register_dissipation_model` ``(name, chi)`` adds a model (from any module:
+``dissipation = "NAME"`` in a scene then selects it) and refuses a name already taken, so
+that no module can replace a shipped model.  :data:`DISSIPATION_MODELS` stays readable as
+before (name -> chi: ``in``, ``[name]``, iteration in registration order) but is read-only:
+writing into it raises :class:`~clearance_contact.errors.ContactParameterError` pointing
+to :func:`register_dissipation_model`.  A model's value is checked wherever it is used
+(:func:`dissipation_factor`, so when a joint is built): chi(c_e) must be a finite real
+number >= 0, else ContactParameterError naming the model, c_e and the value.
 """
 
 from __future__ import annotations
 
+import inspect
 import math
-from typing import Callable
+import numbers
+from collections.abc import Mapping
+from typing import Callable, Iterator
 
 import numpy as np
 
@@ -54,6 +66,7 @@ __all__ = [
     "DISSIPATION_PARAMETERS",
     "DISSIPATION_MODELS",
     "DEFAULT_DISSIPATION",
+    "register_dissipation_model",
     "dissipation_factor",
     "dissipation_encoding",
     "encoded_damping_factor",
@@ -83,25 +96,120 @@ def _hu_guo(ce: float) -> float:
     return 1.5 * (1.0 - ce) / ce
 
 
-DISSIPATION_MODELS: dict[str, Callable[[float], float]] = {
-    "lankarani_nikravesh": hysteresis_factor,
-    "hunt_crossley": _hunt_crossley,
-    "gonthier": _gonthier,
-    "flores": _flores,
-    "hu_guo": _hu_guo,
-}
-"""Registry: name -> chi(c_e) (module docstring's table)."""
+class _ReadOnlyModels(Mapping):
+    """A read-only view of the registered models (name -> chi(c_e)); writes say how to register."""
+
+    __slots__ = ("_models",)
+
+    def __init__(self, models: dict[str, Callable[[float], float]]) -> None:
+        self._models = models
+
+    def __getitem__(self, name: str) -> Callable[[float], float]:
+        return self._models[name]
+
+    def __iter__(self) -> Iterator[str]:
+        return iter(self._models)
+
+    def __len__(self) -> int:
+        return len(self._models)
+
+    def __repr__(self) -> str:
+        return f"DISSIPATION_MODELS({', '.join(self._models)})"
+
+    def __setitem__(self, name, chi) -> None:
+        raise ContactParameterError(
+            f"DISSIPATION_MODELS is read-only (writing {name!r} into it): register a model with "
+            "clearance_contact.register_dissipation_model(name, chi), which refuses a name already taken",
+            key="dissipation", value=name,
+        )  # fmt: skip
+
+    def __delitem__(self, name) -> None:
+        self.__setitem__(name, None)
+
+
+_MODELS: dict[str, Callable[[float], float]] = {}
+
+DISSIPATION_MODELS: Mapping[str, Callable[[float], float]] = _ReadOnlyModels(_MODELS)
+"""Registry: name -> chi(c_e) (module docstring's table); read-only, add with :func:`register_dissipation_model`."""
+
+
+def register_dissipation_model(name: str, chi: Callable[[float], float]) -> Callable[[float], float]:
+    """Register the hysteresis damping factor ``chi(c_e)`` as model ``name``; return ``chi``.
+
+    ``name``: an identifier not registered yet (ContactParameterError naming the model
+    that holds it otherwise: shipped models cannot be replaced); ``chi``: a callable
+    taking c_e in (0, 1] as its one positional argument and returning a finite real
+    number >= 0 (checked whenever a joint is built with the model).
+    """
+    if not isinstance(name, str) or not name.isidentifier():
+        raise ContactParameterError(f"dissipation model name {name!r} must be a non-empty identifier", key="dissipation", value=name)
+    if name in _MODELS:
+        held = _MODELS[name]
+        raise ContactParameterError(
+            f"dissipation model {name!r} is already registered ({getattr(held, '__module__', '?')}."
+            f"{getattr(held, '__qualname__', repr(held))}); choose another name (registered: {', '.join(_MODELS)})",
+            key="dissipation", value=name,
+        )  # fmt: skip
+    _require_one_argument(name, chi)
+    _MODELS[name] = chi
+    return chi
+
+
+def _require_one_argument(name: str, chi) -> None:
+    """ContactParameterError unless ``chi`` is callable as ``chi(c_e)``."""
+    if not callable(chi):
+        raise ContactParameterError(
+            f"dissipation model {name!r}: chi={chi!r} must be a callable chi(c_e) -> float", key="dissipation", value=name
+        )
+    try:
+        inspect.signature(getattr(chi, "py_func", chi)).bind(0.5)  # a compiled kernel: its Python source
+    except TypeError as exc:
+        raise ContactParameterError(
+            f"dissipation model {name!r}: {chi!r} cannot be called as chi(c_e) ({exc}); it must take c_e as its one argument",
+            key="dissipation", value=name,
+        ) from None  # fmt: skip
+    except ValueError:  # no signature to inspect (some builtins): the call itself is checked on use
+        pass
+
+
+for _name, _chi in (
+    ("lankarani_nikravesh", hysteresis_factor),
+    ("hunt_crossley", _hunt_crossley),
+    ("gonthier", _gonthier),
+    ("flores", _flores),
+    ("hu_guo", _hu_guo),
+):
+    register_dissipation_model(_name, _chi)
+del _name, _chi
 
 
 def dissipation_factor(name: str, restitution: float) -> float:
-    """chi of the model ``name`` at the coefficient of restitution c_e in (0, 1]."""
-    model = DISSIPATION_MODELS.get(name) if isinstance(name, str) else None
+    """chi of the model ``name`` at the coefficient of restitution c_e in (0, 1].
+
+    ContactParameterError if ``name`` is not registered, c_e is outside (0, 1], or the
+    model fails: it raises, or returns anything but a finite real number >= 0 (the
+    message names the model, c_e and the value).
+    """
+    model = _MODELS.get(name) if isinstance(name, str) else None
     if model is None:
         raise ContactParameterError(
-            f"dissipation={name!r} is not known; valid: {', '.join(DISSIPATION_MODELS)}", key="dissipation", value=name
+            f"dissipation={name!r} is not known; valid: {', '.join(_MODELS)}", key="dissipation", value=name
         )
     ce = require_in_range("restitution", restitution, 0.0, 1.0, low_inclusive=False)
-    return float(model(ce))
+    _require_one_argument(name, model)
+    try:
+        chi = model(ce)
+    except Exception as exc:  # noqa: BLE001 - the user's model: its failure is reported as bad input
+        raise ContactParameterError(
+            f"dissipation model {name!r} raised {type(exc).__name__} at c_e={ce!r}: {exc}", key="dissipation", value=name
+        ) from exc
+    if isinstance(chi, bool) or not isinstance(chi, numbers.Real) or not (math.isfinite(chi) and chi >= 0.0):
+        raise ContactParameterError(
+            f"dissipation model {name!r} gives chi={chi!r} at c_e={ce!r}: chi must be a finite real number in the valid "
+            "range [0, inf) (a negative chi adds energy at each impact); fix the model's formula",
+            key="dissipation", value=name,
+        )  # fmt: skip
+    return float(chi)
 
 
 def dissipation_encoding(name: str, restitution: float) -> np.ndarray:

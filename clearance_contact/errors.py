@@ -46,6 +46,11 @@ class ContactError(ClearanceMechanismsError):
     """Base class of every error raised by :mod:`clearance_contact`."""
 
 
+class ContactLawError(ContactError):
+    """A user-defined law (e.g. a friction law) broke its contract during a run: it raised, or returned a value
+    outside its valid range. Not a pose the law refuses: an integrator must stop on it, not shrink its step."""
+
+
 class ContactParameterError(ContactError, ValueError):
     """A contact parameter (geometry, material, force law) is invalid.
 

@@ -9,8 +9,11 @@ everything else, once for all types:
   ``EXTRA_OUTPUTS`` (names of internal sections of k values each) the offsets of the
   flat output array (:func:`output_layout`, ``docs/contact-api.md``) are set as
   class attributes (``PENETRATION`` ... ``KIND``, the extras, ``output_size``).
-* **Friction wiring** (:meth:`ClearanceJoint._wire_friction`): validation of the law,
-  its kernel encoding, the ``force_over_speed`` shortcut of a user-defined law.
+* **Friction wiring** (:meth:`ClearanceJoint._wire_friction`): validation of the law
+  (:func:`~clearance_contact.friction.require_friction_law`: a user-defined law's signatures
+  and sample values too) and its kernel encoding; a user-defined law is applied in Python
+  by the type's ``_apply_external_friction`` through the checked calls of
+  :func:`~clearance_contact.friction.user_friction` (one place for every type).
 * **Evaluation and status handling**: :meth:`ClearanceJoint.evaluate` validates the
   state, runs ``kernel`` into a fresh output array and turns a nonzero status into
   :class:`~clearance_contact.errors.ContactError` (a type adds its own codes through
@@ -19,7 +22,8 @@ everything else, once for all types:
 * **Parameters as given**: a joint built from its scene keys
   (:meth:`ClearanceJoint.from_scene`) keeps them as given (``scene_parameters``), so
   that a clearance of ``1e-4`` is reported as ``1e-4`` even when the law stores a
-  radius ``r + 1e-4`` internally.
+  radius ``r + 1e-4`` internally; ``scene_parameters["friction"]`` names the friction law
+  (its scene table: ``{"law": NAME, key: value, ...}``).
 * **Results, failure check, drawing**: per-joint result arrays (:meth:`result_arrays`,
   :meth:`record`: also the inner element's centre in the outer frame and the resultant
   normal force of each group of candidates, ``FORCE_GROUPS``), the clearance of each candidate (:meth:`candidate_clearances`, the
@@ -53,7 +57,7 @@ from .errors import (
     nonfinite_state_message,
     state_array,
 )
-from .friction import FRICTION_EXTERNAL, FrictionLaw, friction_encoding, require_friction_law
+from .friction import FRICTION_EXTERNAL, FrictionLaw, friction_encoding, friction_scene_table, require_friction_law
 from .materials import Material
 from .result import JointContact
 
@@ -149,7 +153,7 @@ class ClearanceJoint:
     (the name of a :mod:`~clearance_contact.dissipation` model, encoded into their parameters).
     """
 
-    __slots__ = ("_friction", "_force_over_speed", "_friction_code", "_restitution", "_dissipation", "_given", "kernel_parameters")
+    __slots__ = ("_friction", "_friction_code", "_restitution", "_dissipation", "_given", "_friction_table", "kernel_parameters")
 
     type_name: ClassVar[str] = ""
     N_CANDIDATES: ClassVar[int] = 0
@@ -184,10 +188,13 @@ class ClearanceJoint:
 
     # -- what the subclass' __init__ calls -------------------------------------------
     def _wire_friction(self, friction: FrictionLaw) -> tuple[int, np.ndarray]:
-        """Validate and keep the friction law; return its kernel encoding (code, parameters)."""
+        """Validate and keep the friction law; return its kernel encoding (code, parameters).
+
+        ContactParameterError for an object that is not a :class:`FrictionLaw`, or a
+        user-defined law with wrong signatures or values (:func:`require_friction_law`).
+        """
         require_friction_law(friction)
         self._friction = friction
-        self._force_over_speed = getattr(friction, "force_over_speed", None)
         code, parameters = friction_encoding(friction)
         self._friction_code = code
         return code, parameters
@@ -213,11 +220,27 @@ class ClearanceJoint:
 
     @classmethod
     def from_scene(
-        cls, parameters: Mapping[str, float], outer_material: Material, inner_material: Material, restitution: float, friction: FrictionLaw
+        cls,
+        parameters: Mapping[str, float],
+        outer_material: Material,
+        inner_material: Material,
+        restitution: float,
+        friction: FrictionLaw,
+        *,
+        friction_table: Mapping[str, Any] | None = None,
     ) -> "ClearanceJoint":
-        """The joint from its scene keys (``SCENE_KEYS``), kept as given (:attr:`scene_parameters`)."""
-        joint = cls._from_scene(dict(parameters), outer_material, inner_material, restitution, friction)
-        joint._given = dict(parameters)
+        """The joint from its scene keys (``SCENE_KEYS``), kept as given (:attr:`scene_parameters`).
+
+        ``friction_table``: the scene's friction table ``friction`` was built from (recorded
+        as ``scene_parameters["friction"]``); None: described from the law itself
+        (:func:`~clearance_contact.friction.friction_scene_table`).  A ``"friction"`` entry of
+        ``parameters`` (what :attr:`scene_parameters` reports) is not a type's key and is
+        ignored: the law is ``friction``.
+        """
+        given = {key: value for key, value in parameters.items() if key != "friction"}
+        joint = cls._from_scene(dict(given), outer_material, inner_material, restitution, friction)
+        joint._given = given
+        joint._friction_table = None if friction_table is None else dict(friction_table)
         return joint
 
     @classmethod
@@ -237,7 +260,9 @@ class ClearanceJoint:
         """Every scene key of the type that has a value: as given, or the law's own value.
 
         A name key (``NAME_KEYS``) reports the name: its attribute is either the name or
-        the registry's object, which carries it as ``name``.
+        the registry's object, which carries it as ``name``.  ``"friction"``: the friction
+        law as a scene table (``{"law": NAME, key: value, ...}``: the scene's, or
+        :func:`~clearance_contact.friction.friction_scene_table` of the law).
         """
         out = {}
         for key in self.SCENE_KEYS:
@@ -246,6 +271,8 @@ class ClearanceJoint:
                 value = value.name
             if value is not None:
                 out[key] = value
+        table = getattr(self, "_friction_table", None)
+        out["friction"] = dict(table) if table is not None else friction_scene_table(self._friction)
         return out
 
     @property

@@ -34,17 +34,25 @@ _builtins_loaded = False
 
 
 def _load_builtins() -> None:
+    """Import the shipped types' modules (they register themselves), once.
+
+    Marked loaded only after every import succeeded: a failed import leaves the
+    registry to try again on the next look-up (the types registered so far stay;
+    registering the same class again is allowed).
+    """
     global _builtins_loaded
     if not _builtins_loaded:
-        _builtins_loaded = True
         for module in BUILTIN_MODULES:
             importlib.import_module(module)
+        _builtins_loaded = True
 
 
 def register_joint_type(cls: type[ClearanceJoint]) -> type[ClearanceJoint]:
     """Register ``cls`` under ``cls.type_name`` and return it (usable as a class decorator).
 
-    Raises :class:`ContactParameterError` if ``cls`` is not a :class:`ClearanceJoint`
+    The shipped types are loaded first (unless ``cls`` is one of them, registering
+    itself), so that a user type can never take a shipped type's name, whenever it
+    is registered.  Raises :class:`ContactParameterError` if ``cls`` is not a :class:`ClearanceJoint`
     subclass with a name, candidates and a kernel, if its scene keys clash with the
     common ones, or if another class already holds the name (registering the same
     class again is allowed: modules may be reloaded).
@@ -67,9 +75,15 @@ def register_joint_type(cls: type[ClearanceJoint]) -> type[ClearanceJoint]:
             f"{cls.__name__}: SCENE_KEYS must not repeat the common keys ({', '.join(clash) or 'none'}) and must "
             f"contain REQUIRED_KEYS, GEOMETRY_KEYS and NAME_KEYS (missing: {', '.join(missing) or 'none'})"
         )
+    if cls.__module__ not in BUILTIN_MODULES:
+        _load_builtins()
     held = _TYPES.get(name)
     if held is not None and (held.__module__, held.__qualname__) != (cls.__module__, cls.__qualname__):
-        raise ContactParameterError(f"joint type {name!r} is already registered by {held.__module__}.{held.__qualname__}")
+        raise ContactParameterError(
+            f"joint type {name!r} is already registered by {held.__module__}.{held.__qualname__}: "
+            f"give {cls.__module__}.{cls.__qualname__} another type_name (registered: {', '.join(sorted(_TYPES))})",
+            key="type_name", value=name,
+        )  # fmt: skip
     _TYPES[name] = cls
     return cls
 

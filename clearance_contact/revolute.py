@@ -228,6 +228,8 @@ from .friction import (
     FrictionLaw,
     NoFriction,
     encoded_force_over_speed,
+    user_friction_force,
+    user_friction_gain,
 )
 from .dissipation import DEFAULT_DISSIPATION, DISSIPATION_PARAMETERS, dissipation_encoding, encoded_damping_factor
 from .joint import ClearanceJoint, Shape, output_layout
@@ -445,7 +447,10 @@ def _slice_state(z, mx, my, mdx, mdy, tx, ty, tdx, tdy, t_abs, bb, bbd, bbtt, bb
         sp_dot = tdx * ex + tdy * ey + tx * edx + ty * edy
         num = sp * sp + bbtt
         x = num / d
-        x_dot = ((2.0 * sp * sp_dot + bbtt_dot) * d - 2.0 * num * (ex * edx + ey * edy + bbd)) / (d * d)
+        if d * d > 0.0:
+            x_dot = ((2.0 * sp * sp_dot + bbtt_dot) * d - 2.0 * num * (ex * edx + ey * edy + bbd)) / (d * d)
+        else:  # d < ~1e-154 (a centred journal tilted by rounding): d * d underflows; the same quotient, divided once
+            x_dot = ((2.0 * sp * sp_dot + bbtt_dot) - 2.0 * x * (ex * edx + ey * edy + bbd)) / d
     else:
         x = 0.0
         x_dot = 0.0
@@ -506,7 +511,7 @@ def _force_point_arms(out, k, pjx, pjy, pjz, dpx, dpy, dpz):
     return nx, ny, nz, rjx, rjy, rjz, rjx + dpx, rjy + dpy, rjz + dpz
 
 
-@jit
+@jit(exports=("void(f8[::1], f8[::1], f8[::1])",))  # _apply_external_friction's call (a user-defined friction law)
 def revolute_wrenches(outer_position, inner_position, out):
     """Write ``out[WRENCH_OUTER:WRENCH_INNER + 6]`` from the forces in ``out`` (module docstring).
 
@@ -1278,9 +1283,13 @@ class RevoluteClearanceJoint(ClearanceJoint):
         The kernel left the tangential slip v_t in ``friction_force`` and w_n r_s in
         ``SPIN_SPEED``; the law sees the combined slip v_t + w_n r_s n (module docstring):
         its tangential part is F_t, its normal part times r_s the spin torque.  Then the
-        wrenches are assembled by :func:`revolute_wrenches` (the kernel's own code).
+        wrenches are assembled by :func:`revolute_wrenches` (the kernel's own code).  The law
+        is called through the checked :func:`~clearance_contact.friction.user_friction_gain`
+        / :func:`~clearance_contact.friction.user_friction_force` (ContactError for a law that
+        raises or gives NaN, a negative g or a force along the slip).
         """
-        gos = self._force_over_speed
+        law = self._friction
+        has_gain = getattr(law, "force_over_speed", None) is not None
         for k in range(_K):
             force_n = float(out[NORMAL_FORCE + k])
             if force_n <= 0.0:
@@ -1290,17 +1299,14 @@ class RevoluteClearanceJoint(ClearanceJoint):
             nx, ny, nz = out[NORMAL + 3 * k : NORMAL + 3 * k + 3].tolist()
             spin = float(out[SPIN_SPEED + k])
             spin_radius = float(out[SPIN_RADIUS + k])
-            if gos is not None:
-                gain = gos(force_n, math.sqrt(vtx * vtx + vty * vty + vtz * vtz + spin * spin))
+            if has_gain:
+                gain = user_friction_gain(law, force_n, math.sqrt(vtx * vtx + vty * vty + vtz * vtz + spin * spin))
                 ftx = -gain * vtx
                 fty = -gain * vty
                 ftz = -gain * vtz
                 t_spin = -gain * spin * spin_radius
             else:  # generic FrictionLaw: slip + spin as one (3,) vector
-                ff = np.asarray(
-                    self._friction.force(force_n, np.array((vtx + spin * nx, vty + spin * ny, vtz + spin * nz))),
-                    dtype=float,
-                ).tolist()
+                ff = user_friction_force(law, force_n, np.array((vtx + spin * nx, vty + spin * ny, vtz + spin * nz))).tolist()
                 fn_ = ff[0] * nx + ff[1] * ny + ff[2] * nz
                 ftx = ff[0] - fn_ * nx
                 fty = ff[1] - fn_ * ny

@@ -94,6 +94,7 @@ from .friction import (
     FrictionLaw,
     NoFriction,
     encoded_force_over_speed,
+    user_friction,
 )
 from .joint import ClearanceJoint, Shape, output_layout
 from .materials import Material, hertz_sphere_stiffness, require_material
@@ -132,7 +133,7 @@ KIND = _LAYOUT["KIND"]
 OUTPUT_SIZE = _LAYOUT["OUTPUT_SIZE"]
 
 
-@jit
+@jit(exports=("void(f8[::1], f8[::1])",))  # _apply_external_friction's call (a user-defined friction law)
 def spherical_wrenches(parameters, out):
     """Write ``out[WRENCH_OUTER:WRENCH_INNER + 6]`` from the normal and friction forces in ``out``.
 
@@ -465,15 +466,14 @@ class SphericalClearanceJoint(ClearanceJoint):
 
     # -- evaluation (ClearanceJoint.evaluate / penetration run the kernels) ---------------
     def _apply_external_friction(self, state: tuple, out: np.ndarray) -> None:
-        """Finish :func:`spherical_kernel`'s ``STATUS_EXTERNAL_FRICTION`` output: the user's law on the slip v_t."""
+        """Finish :func:`spherical_kernel`'s ``STATUS_EXTERNAL_FRICTION`` output: the user's law on the slip v_t.
+
+        Through :func:`~clearance_contact.friction.user_friction` (checked: ContactError for a
+        law that raises or gives NaN, a negative g or a force along the slip).
+        """
         force_n = float(out[NORMAL_FORCE])
         if force_n > 0.0:  # friction_force holds the slip v_t
-            slip = out[FRICTION_FORCE : FRICTION_FORCE + 3].copy()
-            if self._force_over_speed is not None:
-                friction = -self._force_over_speed(force_n, math.hypot(*slip.tolist())) * slip
-            else:
-                friction = np.asarray(self._friction.force(force_n, slip), dtype=float)
-            out[FRICTION_FORCE : FRICTION_FORCE + 3] = friction
+            out[FRICTION_FORCE : FRICTION_FORCE + 3] = user_friction(self._friction, force_n, out[FRICTION_FORCE : FRICTION_FORCE + 3].copy())
         spherical_wrenches(self.kernel_parameters, out)
 
     # -- drawing ----------------------------------------------------------------------

@@ -127,8 +127,8 @@ from .compiled import (
     norm3,
 )
 from .errors import ContactParameterError, require_positive
-from .friction import FRICTION_EXTERNAL, FRICTION_NONE, FRICTION_PARAMETERS, FrictionLaw, NoFriction, encoded_force_over_speed
-from .joint import ClearanceJoint, Shape, output_layout
+from .friction import FRICTION_EXTERNAL, FRICTION_NONE, FRICTION_PARAMETERS, FrictionLaw, NoFriction, encoded_force_over_speed, user_friction
+from .joint import ClearanceJoint, Shape
 from .materials import Material, require_material, sphere_plane_stiffness
 from .dissipation import DEFAULT_DISSIPATION, DISSIPATION_PARAMETERS, dissipation_encoding, encoded_damping_factor
 from .normal_force import validate_normal_law
@@ -198,7 +198,7 @@ def corner_normal_force(parameters, penetration, penetration_rate, onset_rate):
     return force if force > 0.0 else 0.0
 
 
-@jit
+@jit(exports=("void(f8[::1], f8[::1], f8[::1], f8[::1])",))  # _apply_external_friction's call (a user-defined friction law)
 def translational_wrenches(parameters, outer_position, inner_position, out):
     """Write the two wrenches from the normal and friction forces in ``out`` (module docstring).
 
@@ -548,12 +548,16 @@ class _SliderInGuide(ClearanceJoint):
 
     # -- evaluation ------------------------------------------------------------------
     def _apply_external_friction(self, state: tuple, out: np.ndarray) -> None:
-        """Apply the user's friction law to the slips the kernel left in ``friction_force``, then the wrenches."""
+        """Apply the user's friction law to the slips the kernel left in ``friction_force``, then the wrenches.
+
+        Through :func:`~clearance_contact.friction.user_friction` (checked: ContactError for a
+        law that raises or gives NaN, a negative g or a force along the slip).
+        """
         for c in range(self.N_CANDIDATES):
             force_n = float(out[self.NORMAL_FORCE + c])
             i = self.FRICTION_FORCE + 3 * c
             if force_n > 0.0:
-                out[i : i + 3] = np.asarray(self._friction.force(force_n, out[i : i + 3].copy()), dtype=float)
+                out[i : i + 3] = user_friction(self._friction, force_n, out[i : i + 3].copy())
         translational_wrenches(self.kernel_parameters, state[1], state[4], out)
 
     # -- drawing ---------------------------------------------------------------------

@@ -95,6 +95,23 @@ def test_a_scene_runs_a_user_integrator_named_in_the_environment(tmp_path):
     assert 1.8 < ratio < 2.2, ratio
 
 
+def test_a_sweep_s_workers_load_the_extensions_too(tmp_path):
+    """The scene is validated again in each worker process (a LocalCluster of its own processes): they import the
+    modules named in the environment they inherit."""
+    (tmp_path / "user_euler.py").write_text(EULER_MODULE)
+    sweep = tmp_path / "sweep.toml"
+    sweep.write_text(
+        f'[sweep]\nscene = "{_scene(tmp_path, 2e-5).as_posix()}"\nt_end = 0.004\n\n'
+        '[[axis]]\nkey = "solver.first_step"\nvalues = [2e-5, 1e-5]\n'
+    )
+    done = _clearance(tmp_path, "sweep", str(sweep), "--out", str(tmp_path / "sw"), "--workers", "1", "--no-figures", "--no-progress", modules="user_euler")
+    assert done.returncode == 0, done.stderr[-3000:]
+    from robot.sweep import open_sweep
+
+    store = open_sweep(tmp_path / "sw" / "sweep.zarr")
+    assert (store["status"].values == 0).all() and store["status"].size == 2
+
+
 def test_without_the_variable_the_scene_names_an_unknown_method(tmp_path):
     (tmp_path / "user_euler.py").write_text(EULER_MODULE)
     done = _clearance(tmp_path, "run", "--scene", str(_scene(tmp_path, 1e-5)), "--check", modules="")

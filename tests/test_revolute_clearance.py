@@ -404,6 +404,20 @@ def test_force_and_moment_continuous_through_zero_tilt(friction) -> None:
         assert np.all(jump <= 2 * slope * 2 * eps + 1e-12 * scale), (eps, jump)
 
 
+@pytest.mark.parametrize("tilt", [1e-30, 1e-46, 1e-80])
+def test_a_centred_journal_tilted_by_rounding_has_a_finite_state(tilt) -> None:
+    """Eccentricity exactly 0 and a tilt of rounding size: the slice's d = |e|^2 + (R_j |t|^2)^2 is ~1e-182, d^2
+    underflows to 0 (a ZeroDivisionError of the compiled kernels in a free-flying arm's warm-up). Out of contact,
+    finite, and the same as a slightly larger tilt's state."""
+    joint = make_joint()
+    twist = np.array([0.0, 0.0, 0.0, 0.3, -0.2, 2.0])  # turning and rocking
+    result = joint.evaluate(I3, Z3, Z6, rot([1.0, 0.0, 0.0], tilt), Z3, twist, np.full(joint.N_CANDIDATES, 0.1))
+    assert np.all(np.isfinite(result.penetration)) and np.all(np.isfinite(result.penetration_rate))
+    assert np.all(result.penetration < 0) and not result.normal_force.any()
+    reference = joint.evaluate(I3, Z3, Z6, rot([1.0, 0.0, 0.0], 1e-12), Z3, twist, np.full(joint.N_CANDIDATES, 0.1))
+    np.testing.assert_allclose(result.penetration, reference.penetration, rtol=0, atol=1e-13)  # the 1e-12 tilt moves it 2e-14
+
+
 # --- damping and friction --------------------------------------------------------------------
 def test_lankarani_nikravesh_damping_of_a_line_contact() -> None:
     joint = make_joint(restitution=0.8)

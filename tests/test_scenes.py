@@ -132,3 +132,33 @@ def test_clearance_on_a_joint_that_does_not_exist(tmp_path):
     path.write_text('extends = "spherical"\n[[clearance]]\njoint = "Q9"\ntype = "spherical"\nball_radius = 0.015\nclearance = 1e-4\n')
     with pytest.raises(Exception, match="Q9"):
         build_run(str(path))
+
+
+@pytest.mark.parametrize(
+    ("overrides", "words"),
+    [
+        ({"trajectory.crank.rate": "fast"}, "crank: rate='fast' must be a finite number"),
+        ({"trajectory.crank.offset": float("nan")}, "crank: offset=nan must be a finite number"),
+        ({"trajectory.crank.amplitudes": [0.1, "x"], "trajectory.crank.harmonics": [1, 2], "trajectory.crank.phases": [0, 0]}, "amplitudes[1]='x' must be a finite number"),
+        ({"trajectory.crank.amplitudes": 0.1}, "amplitudes=0.1 must be a list of finite numbers"),
+        ({"trajectory.crank.amplitudes": [0.1], "trajectory.crank.harmonics": [1, 2]}, "must have the same length"),
+    ],
+)
+def test_a_fourier_coordinate_s_numbers_are_checked_when_the_scene_is_read(overrides, words):
+    """Refused before any run (a sweep's axis value too), naming the coordinate, key and value (once a run failed
+    with 'could not convert string to float' on the point that had it)."""
+    with pytest.raises(SceneError) as refused:
+        load_scene("slider_crank_revolute", overrides)
+    assert words in str(refused.value)
+
+
+def test_an_override_that_changes_the_friction_law_starts_a_new_table():
+    """`friction.law` is a kind key, like a time function's `function` (docs/scenes.md, "extends"): switching it drops
+    the old law's keys, the keys given with it fill the new table whatever their order, and a key of no law in use
+    (a swept `friction.dynamic` on a frictionless joint) is refused, not ignored."""
+    off = load_scene("slider_crank_translational", {"clearance.slider.friction.law": "none"})
+    assert off.clearances[0].law.scene_parameters["friction"] == {"law": "none"}
+    coulomb = load_scene("slider_crank_translational", {"clearance.slider.friction.coefficient": 0.2, "clearance.slider.friction.law": "coulomb"})
+    assert coulomb.clearances[0].law.scene_parameters["friction"]["coefficient"] == 0.2
+    with pytest.raises(SceneError, match="unknown key.*dynamic.*of friction law 'none'"):
+        load_scene("slider_crank_translational", {"clearance.slider.friction.law": "none", "clearance.slider.friction.dynamic": 0.2})

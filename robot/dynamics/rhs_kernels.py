@@ -265,14 +265,15 @@ def add_wrench(placements, J, mask_row, frame, wrench, tau):
             tau[c] += J[0, c] * fx + J[1, c] * fy + J[2, c] * fz + J[3, c] * mx + J[4, c] * my + J[5, c] * mz
 
 
-@jit
+# site_twists and add_site_wrenches: the site-by-site path (a law with no compiled kernel, e.g. a user's friction law)
+@jit(exports=("void(f8[:, ::1], f8[::1, :], i8[:, ::1], i8, i8, f8[::1], f8[:, ::1])",))
 def site_twists(placements, J, masks, frame_outer, frame_inner, v, twists):
     """twists[0], twists[1] = LWA twists of the outer and inner element frames (``masks`` rows 0, 1)."""
     point_velocity(placements, J, masks[0], frame_outer, v, twists[0])
     point_velocity(placements, J, masks[1], frame_inner, v, twists[1])
 
 
-@jit
+@jit(exports=("void(f8[:, ::1], f8[::1, :], i8[:, ::1], i8, i8, f8[::1], i8, i8, f8[::1])",))
 def add_site_wrenches(placements, J, masks, frame_outer, frame_inner, out, wrench_outer, wrench_inner, tau):
     """tau += J^T w of a clearance joint's two wrenches, at offsets ``wrench_outer``/``wrench_inner`` of its law's ``out``."""
     add_wrench(placements, J, masks[0], frame_outer, out[wrench_outer : wrench_outer + 6], tau)

@@ -40,7 +40,7 @@ from typing import Callable, NamedTuple, Protocol
 
 import numpy as np
 
-from clearance_contact import ONSET_RATE_FLOOR, ContactError
+from clearance_contact import ONSET_RATE_FLOOR, ContactError, ContactLawError
 
 from robot.dynamics.probe import Probe as ContactProbe  # the step loop's name for it (robot.validation imports it)
 from robot.integration import methods as registry
@@ -173,8 +173,10 @@ class EventDrivenIntegrator:
                     break
         except _Failure as failure:
             status, cause, message = FAILED, failure.cause, str(failure)
-        except (np.linalg.LinAlgError, RuntimeError, ValueError) as exc:
-            status, cause, message = FAILED, "solver error", f"t={self.t:.9g} s: {type(exc).__name__}: {exc}"
+        except ContactLawError as exc:
+            status, cause, message = FAILED, "contact law error", f"t={self.t:.9g} s: {exc}"
+        except (np.linalg.LinAlgError, RuntimeError, ValueError, ArithmeticError) as exc:
+            status, cause, message = FAILED, "solver error", f"t={self.t:.9g} s: {self.options.method}: {type(exc).__name__}: {exc}"
         except KeyboardInterrupt:
             status, cause, message = FAILED, "interrupted", f"t={self.t:.9g} s: interrupted by the user"
         if status == FAILED:
@@ -415,6 +417,8 @@ class EventDrivenIntegrator:
         """The system's probe at an accepted (or located) state: a refused pose means the run has blown up."""
         try:
             return self.system.probe(t, y, self.onset if onset is None else onset, residual)
+        except ContactLawError:
+            raise  # not the pose: a user-defined law broke its contract (run(): "contact law error")
         except ContactError as exc:
             # an accepted state (a fixed-step method accepts every step) in an absurd pose,
             # e.g. a journal turned half round in its bearing

@@ -26,7 +26,7 @@ import math
 
 import numpy as np
 
-from clearance_contact import ContactError
+from clearance_contact import ContactError, ContactLawError
 
 from robot.integration import methods as registry
 from robot.integration.dense import HermiteDense
@@ -41,12 +41,16 @@ def derivative_or_inf(system, onset_rates: np.ndarray):
     A trial stage of a too-large step can land in an absurd pose (e.g. a journal
     turned half round): a non-finite derivative makes the step's error estimate
     non-finite, so the solver rejects the step and shrinks it. Accepted states
-    are still checked, and a real blow-up is reported.
+    are still checked, and a real blow-up is reported. A ``ContactLawError`` (a
+    user-defined law that raised or returned a value out of range) passes through:
+    the run stops on it, naming the law.
     """
 
     def fun(t: float, y: np.ndarray) -> np.ndarray:
         try:
             return system.derivative(t, y, onset_rates)
+        except ContactLawError:
+            raise  # a user-defined law broke its contract: no smaller step mends that
         except ContactError:
             return np.full(system.size, np.inf)
 

@@ -25,6 +25,15 @@ The traits decide:
 * ``available``: False when an optional dependency is missing (CVODE without
   scikit-sundae): the method is then not on offer.
 
+:func:`register` checks the traits (types and ranges: a bad one is refused with
+a :class:`robot.errors.RegistrationError` naming the field, its value and the
+valid range) and the solver class: an ``OdeSolver``-like class (``step``,
+``dense_output``; ``_step_impl`` and ``_dense_output_impl`` implemented if it
+derives from a base ``OdeSolver``; a constructor taking the arguments
+:func:`robot.integration.solvers.make_solver` passes for these traits). A class
+given as ``"module:attribute"`` is imported and checked when the method is first
+looked up (the scene's ``[solver]`` validation), the error naming the method.
+
 Plain data: importing this module imports neither Pinocchio nor the solvers'
 numerics (classes may be given as ``"module:attribute"`` and are imported on use).
 The old per-trait tables (``METHODS``, ``FIXED_STEP_METHODS``,
@@ -36,9 +45,11 @@ from __future__ import annotations
 
 import functools
 import importlib
+import inspect
+import math
 from collections.abc import Iterator, Mapping
 from dataclasses import dataclass
-from typing import Callable
+from typing import Callable, NoReturn
 
 
 @dataclass(frozen=True)
@@ -60,10 +71,9 @@ class IntegratorTraits:
     description: str = ""
 
     def solver_class(self) -> type:
-        """The solver class (imported now if it was registered by name)."""
+        """The solver class (imported and checked on first use if it was registered by name)."""
         if isinstance(self.solver, str):
-            module, _, attribute = self.solver.partition(":")
-            return getattr(importlib.import_module(module), attribute)
+            return _imported_solver_class(self)
         return self.solver
 
     def is_available(self) -> bool:
@@ -74,15 +84,125 @@ _REGISTRY: dict[str, IntegratorTraits] = {}
 
 
 def register(traits: IntegratorTraits, *, replace: bool = False) -> IntegratorTraits:
-    """Add a method to the registry (``replace=True`` to redefine an existing name)."""
+    """Add a method to the registry (``replace=True`` to redefine an existing name); its traits and class checked."""
     if not isinstance(traits, IntegratorTraits):
-        raise TypeError(f"register() takes IntegratorTraits, got {type(traits).__name__}")
+        _refuse(f"register() takes IntegratorTraits, got {type(traits).__name__}", "traits", traits)
     if traits.name in _REGISTRY and not replace:
-        raise ValueError(f"integrator method={traits.name!r} is already registered (pass replace=True to redefine it)")
-    if traits.fixed_step and traits.step_sizes and min(traits.step_sizes) <= 0:
-        raise ValueError(f"integrator method={traits.name!r}: step_sizes={traits.step_sizes!r} must be positive")
+        _refuse(f"integrator method={traits.name!r} is already registered (pass replace=True to redefine it)", "name", traits.name)
+    check_traits(traits)
+    if not isinstance(traits.solver, str):
+        check_solver_class(traits, traits.solver)
     _REGISTRY[traits.name] = traits
     return traits
+
+
+#: the boolean traits
+FLAGS = ("fixed_step", "explicit", "takes_jacobian", "second_order_structure", "replayable")
+
+
+def check_traits(traits: IntegratorTraits) -> None:
+    """RegistrationError naming the first field of ``traits`` of a wrong type or out of its range."""
+    name = traits.name
+    if not isinstance(name, str) or not name or name.strip() != name:
+        _refuse(f"integrator name={name!r} must be a non-empty string without surrounding spaces", "name", name)
+    where = f"integrator method={name!r}"
+    for flag in FLAGS:
+        value = getattr(traits, flag)
+        if not isinstance(value, bool):
+            _refuse(f"{where}: {flag}={value!r} must be True or False", flag, value)
+    stages = traits.stages
+    if stages is not None and (isinstance(stages, bool) or not isinstance(stages, int) or stages < 1):
+        _refuse(
+            f"{where}: stages={stages!r} must be None or an integer in the valid range [1, inf): the right-hand sides "
+            "of one attempted step, from which the rejected steps are counted (None: not countable that way)",
+            "stages",
+            stages,
+        )
+    sizes = traits.step_sizes
+    if not isinstance(sizes, tuple) or not all(isinstance(h, (int, float)) and not isinstance(h, bool) and 0 < h < math.inf for h in sizes):
+        _refuse(f"{where}: step_sizes={sizes!r} must be a tuple of step sizes in s, each in the valid range (0, inf)", "step_sizes", sizes)
+    if traits.available is not None and not callable(traits.available):
+        _refuse(f"{where}: available={traits.available!r} must be None or a function returning True or False", "available", traits.available)
+    if not isinstance(traits.description, str):
+        _refuse(f"{where}: description={traits.description!r} must be a string", "description", traits.description)
+    solver = traits.solver
+    if isinstance(solver, str):
+        module, colon, attribute = solver.partition(":")
+        if not (colon and all(part.isidentifier() for part in module.split(".")) and attribute.isidentifier()):
+            _refuse(f"{where}: solver={solver!r} must be a class or 'module:attribute' (e.g. 'scipy.integrate:RK45')", "solver", solver)
+    elif not isinstance(solver, type):
+        _refuse(f"{where}: solver={solver!r} must be a class (an OdeSolver subclass) or 'module:attribute', not a {type(solver).__name__}", "solver", solver)
+
+
+def check_solver_class(traits: IntegratorTraits, cls: object) -> None:
+    """RegistrationError unless ``cls`` is an ``OdeSolver``-like class the solver factory can build for ``traits``."""
+    where = f"integrator method={traits.name!r}: solver {getattr(cls, '__module__', '?')}.{getattr(cls, '__qualname__', cls)}"
+    if not isinstance(cls, type):
+        _refuse(f"{where} is not a class (give an OdeSolver subclass)", "solver", cls)
+    problems = [f"it has no method {method}()" for method in ("step", "dense_output") if not callable(getattr(cls, method, None))]
+    problems += [f"it does not implement {method} (the base OdeSolver's raises NotImplementedError)" for method in _BASE_STUBS if _inherits_stub(cls, method)]
+    problems += [_constructor_problem(traits, cls)]
+    problems = [p for p in problems if p]
+    if problems:
+        _refuse(
+            f"{where} is not an OdeSolver-like class: {'; '.join(problems)} (robot.integration.solver_base describes the contract)",
+            "solver",
+            cls,
+        )
+
+
+#: methods a subclass of a base ``OdeSolver`` (this package's or scipy's) must implement
+_BASE_STUBS = ("_step_impl", "_dense_output_impl")
+_BASE_MODULES = ("robot.integration.solver_base", "scipy.integrate._ivp.base")
+
+
+def _inherits_stub(cls: type, method: str) -> bool:
+    """Whether ``cls.method`` is the not-implemented stub of a base ``OdeSolver`` (scipy's is not imported to tell)."""
+    function = getattr(cls, method, None)
+    return function is not None and getattr(function, "__qualname__", "") == f"OdeSolver.{method}" and getattr(function, "__module__", "") in _BASE_MODULES
+
+
+def _constructor_problem(traits: IntegratorTraits, cls: type) -> str | None:
+    """Why ``cls(fun, t0, y0, t_bound, **options)`` cannot be called as the solver factory calls it for ``traits``."""
+    if traits.second_order_structure:
+        options: tuple[str, ...] = ("first_step", "rtol", "atol", "structure")
+    elif traits.fixed_step:
+        options = ("first_step",)
+    else:
+        options = ("rtol", "atol", "max_step", "first_step") + (("jac",) if traits.takes_jacobian else ())
+    try:
+        signature = inspect.signature(cls)
+    except (TypeError, ValueError):  # not introspectable: not checked
+        return None
+    try:
+        signature.bind("fun", "t0", "y0", "t_bound", **{option: None for option in options})
+    except TypeError:
+        return f"its constructor {cls.__name__}{signature} does not take (fun, t0, y0, t_bound, {', '.join(o + '=' for o in options)})"
+    return None
+
+
+@functools.lru_cache(maxsize=None)
+def _imported_solver_class(traits: IntegratorTraits) -> type:
+    """The class named ``"module:attribute"`` by ``traits.solver``, imported and checked (cached once it passes)."""
+    module, _, attribute = traits.solver.partition(":")
+    try:
+        cls = getattr(importlib.import_module(module), attribute)
+    except (ImportError, AttributeError) as exc:
+        _refuse(
+            f"integrator method={traits.name!r}: its solver {traits.solver!r} cannot be imported ({type(exc).__name__}: {exc}); "
+            "install the module or fix the name given to register()",
+            "solver",
+            traits.solver,
+        )
+    check_solver_class(traits, cls)
+    return cls
+
+
+def _refuse(message: str, key: str, value: object) -> NoReturn:
+    """Raise the RegistrationError (imported here: the registry stays plain data, see the module docstring)."""
+    from robot.errors import RegistrationError
+
+    raise RegistrationError(message, key=key, value=value)
 
 
 def unregister(name: str) -> None:

@@ -125,10 +125,13 @@ class OdeSolver:
         return self._dense_output_impl()
 
     def _step_impl(self) -> tuple[bool, str | None]:
-        raise NotImplementedError
+        raise NotImplementedError(f"{type(self).__qualname__} does not implement _step_impl() -> (success, message): the solver cannot step")
 
     def _dense_output_impl(self) -> "DenseOutput":
-        raise NotImplementedError
+        raise NotImplementedError(
+            f"{type(self).__qualname__} does not implement _dense_output_impl() -> DenseOutput: the step loop needs the interpolant "
+            "over a step to locate contact onsets, penetration and force peaks and output times (e.g. return a HermiteDense)"
+        )
 
 
 class DenseOutput:

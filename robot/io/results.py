@@ -61,7 +61,7 @@ Status: ``status`` 0 and ``cause`` ``None`` for a run that reached the end;
 the time) and ``cause``, one of ``non-finite state``, ``penetration beyond
 physical bound``, ``constraint drift``, ``step size collapse``, ``event
 chattering``, ``wall time``, ``unphysical pose``, ``Newton divergence``,
-``solver error``, ``interrupted``: what triggers each and what to do is in
+``solver error``, ``contact law error``, ``interrupted``: what triggers each and what to do is in
 ``docs/dynamics.md`` ("Failure causes"). The arrays then hold every record up to
 the stop.
 """

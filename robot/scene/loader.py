@@ -69,6 +69,8 @@ Schema (defaults in brackets)::
     material = "steel" # or outer_material / inner_material
     restitution = 0.9
     friction = {law = "brown_mcphee", static = 0.07, dynamic = 0.05, transition_velocity = 5e-3}
+                       # law: "none" [default], "brown_mcphee", "coulomb", or a law a module registered
+                       # (clearance_contact.register_friction_law); its keys are checked by its registry entry
     # the type's own keys (its SCENE_KEYS: numbers, and names for its NAME_KEYS):
     # spherical: ball_radius, clearance, exponent [1.5], stiffness [Hertz], dissipation
     # revolute: journal_radius, radial_clearance, bearing_outer_radius, bearing_length,
@@ -108,22 +110,16 @@ from typing import Any, Mapping
 
 import numpy as np
 
-from clearance_contact import (
-    BrownMcPheeFriction,
-    ContactError,
-    CoulombFriction,
-    Material,
-    NoFriction,
-    joint_type,
-    joint_types,
-)
+from clearance_contact import ContactError, Material, joint_type, joint_types
+from clearance_contact.friction import friction_law_from_scene, friction_law_type
 from clearance_contact.registry import COMMON_SCENE_KEYS
 
 from robot.data import shipped_urdf
 from robot.errors import MechanismFileError, SceneError
+from robot.extensions import load_extensions
 from robot.io.array_names import result_array_names
 from robot.model.description import CLEARANCE_TREE_KINDS, parse_mechanism
-from robot.scene.overrides import apply_overrides
+from robot.scene.overrides import KIND_KEYS, apply_overrides
 from robot.dynamics.baumgarte import Baumgarte
 from robot.integration.options import STRUCTURED, FailureLimits, SolverOptions
 from robot.integration.solvers import FIXED_STEP_METHODS, METHODS
@@ -139,7 +135,6 @@ _OUTPUT_KEYS = {"step", "keep", "precision"}
 PRECISIONS = ("float64", "float32")
 #: keys that choose which other keys a table has (a time function's, an actuator's mode): with ``extends``,
 #: a child table setting one of them to another value replaces the parent's table instead of merging into it
-KIND_KEYS = ("function", "mode")
 #: prefix of a shipped mechanism file in a scene's ``mechanism`` key
 PACKAGE_PREFIX = "package://"
 #: the largest initial misalignment looked at (degrees); the admissible one is set by the clearances
@@ -150,7 +145,10 @@ _SOLVER_KEYS = {"method", "rtol", "atol", "max_step", "first_step", "jacobian"}
 _BAUMGARTE_KEYS = {"alpha", "beta"}
 _LIMIT_KEYS = {"penetration_ratio", "max_residual", "min_step", "max_wall_time", "max_steps"}
 _MATERIAL_KEYS = {"youngs_modulus", "poisson_ratio"}
-_FRICTION_KEYS = {"law", "static", "dynamic", "transition_velocity", "viscous", "reference_force", "coefficient", "regularisation_velocity"}
+#: the shipped friction laws (clearance_contact.friction's registry holds them and any law a user registers)
+BUILTIN_FRICTION_LAWS = ("none", "brown_mcphee", "coulomb")
+#: the keys of the shipped friction laws' tables (a registered law's own keys are its FrictionKey s)
+_FRICTION_KEYS = {"law"}.union(*({key.name for key in friction_law_type(name).keys} for name in BUILTIN_FRICTION_LAWS))
 _COORDINATE_KEYS = {"offset", "rate", "amplitudes", "harmonics", "phases"}
 _TRAJECTORY_KEYS = {"type", "period", "preset"}  # besides the coordinates' tables
 _INITIAL_KEYS = {"misalignment_deg", "positions", "velocities", "clearance_state"}
@@ -226,15 +224,39 @@ class Scene:
     document: dict[str, Any] = field(default_factory=dict, compare=False, repr=False)
     #: the folder that relative paths of the document are relative to
     base_dir: Path | None = field(default=None, compare=False, repr=False)
+    #: the clearances validated from ``document`` (the same tuple as ``clearances`` unless they were
+    #: replaced afterwards, e.g. by ``dataclasses.replace``: then the document no longer says them)
+    document_clearances: tuple[ClearanceSpec, ...] | None = field(default=None, compare=False, repr=False)
 
     def with_changes(self, overrides: Mapping[str, Any]) -> "Scene":
         """A new scene: this one's document with key paths changed, validated again.
 
-        ``scene.with_changes({"solver.rtol": 1e-8, "clearance.R1.radial_clearance": 2e-4})``
+        ``scene.with_changes({"solver.rtol": 1e-8, "clearance.R1.radial_clearance": 2e-4})``.
+        SceneError if this scene's clearances were replaced outside its document (its
+        validation would silently bring back the document's laws): name the law in the
+        document instead (``clearance.J.friction``, a registered friction law).
         """
         if self.path is None or self.base_dir is None:
             raise SceneError("this scene was not loaded from a document; build it with load_scene(...)")
+        self._require_document_clearances()
         return scene_from_document(apply_overrides(self.document, overrides), self.path, self.base_dir)
+
+    def _require_document_clearances(self) -> None:
+        """SceneError naming the clearance joints whose laws are not the ones the document validated to."""
+        if self.document_clearances is None or self.clearances is self.document_clearances:
+            return
+        validated = {spec.joint: spec for spec in self.document_clearances}
+        changed = [spec.joint for spec in self.clearances if validated.get(spec.joint) is not spec]
+        changed += [joint for joint in validated if joint not in self.clearance_joints]
+        if changed:
+            raise SceneError(
+                f"scene {self.name!r}: the clearance joint(s) {', '.join(map(repr, changed))} were replaced outside the scene's "
+                "document (dataclasses.replace?), and validating the document again would silently bring back its own laws; "
+                "change them through the document instead: register a friction law with "
+                "clearance_contact.register_friction_law and name it, "
+                "scene.with_changes({'clearance.JOINT.friction': {'law': NAME, ...}})",
+                key="clearance", value=changed,
+            )  # fmt: skip
 
     @property
     def clearance_joints(self) -> tuple[str, ...]:
@@ -427,26 +449,16 @@ def _materials(data: dict, where: str) -> dict[str, Material]:
     return out
 
 
-def _friction(table: Any, where: str):
-    if table is None:
-        return NoFriction()
-    if not isinstance(table, dict):
-        raise SceneError(f"{where}: friction must be a table, got {table!r}")
-    _unknown(table, _FRICTION_KEYS, where)
-    law = table.get("law", "none")
-    if law == "none":
-        return NoFriction()
-    if law == "brown_mcphee":
-        return BrownMcPheeFriction(
-            _number(table, "static", where, required=True),
-            _number(table, "dynamic", where, required=True),
-            _number(table, "transition_velocity", where, required=True),
-            _number(table, "viscous", where, 0.0),
-            _number(table, "reference_force", where, 1.0),
-        )
-    if law == "coulomb":
-        return CoulombFriction(_number(table, "coefficient", where, required=True), _number(table, "regularisation_velocity", where, 0.0))
-    raise SceneError(f"{where}: friction law={law!r} is not known; use 'brown_mcphee', 'coulomb' or 'none'", key="law", value=law)
+def _friction(table: Any, where: str) -> tuple[Any, dict]:
+    """(law, its table as validated) of a clearance's ``friction`` table: a law registered by name
+    (:func:`clearance_contact.friction.register_friction_law`; the shipped ones and any a user module
+    registered), its keys checked there; no table: no friction.  SceneError naming key, value and range."""
+    if table is not None and not isinstance(table, dict):
+        raise SceneError(f"{where}: friction must be a table {{law = NAME, ...}}, got {table!r}", key="friction", value=table)
+    try:
+        return friction_law_from_scene(table)
+    except ContactError as exc:
+        raise SceneError(f"{where}: {exc}", key=getattr(exc, "key", None), value=getattr(exc, "value", None)) from None
 
 
 def _clearance(table: Any, index: int, materials: dict[str, Material], where: str) -> ClearanceSpec:
@@ -485,9 +497,9 @@ def _clearance(table: Any, index: int, materials: dict[str, Material], where: st
         for key in law_type.SCENE_KEYS
         if key in table
     }
+    friction, friction_table = _friction(table.get("friction"), f"{w} friction")
     try:
-        friction = _friction(table.get("friction"), f"{w} friction")
-        law = law_type.from_scene(parameters, outer, inner, restitution, friction)
+        law = law_type.from_scene(parameters, outer, inner, restitution, friction, friction_table=friction_table)
     except ContactError as exc:
         raise SceneError(f"{w}: {exc}", key=getattr(exc, "key", None), value=getattr(exc, "value", None)) from None
     return ClearanceSpec(joint, kind, outer_on, law)
@@ -635,10 +647,24 @@ def _trajectory(table: dict, where: str, base_dir: Path | None = None) -> Trajec
             functions[name] = time_function(coordinate, f"{w} {name}", base_dir)
             continue
         _unknown(coordinate, _COORDINATE_KEYS | ({"function"} if kind == "joints" else set()), f"{w} {name}")
-        lengths = {len(coordinate.get(k, [])) for k in ("amplitudes", "harmonics", "phases")}
-        if len(lengths) > 1:
-            raise SceneError(f"{w} {name}: amplitudes, harmonics and phases must have the same length")
+        _fourier_numbers(coordinate, f"{w} {name}")
     return TrajectorySpec(kind, period, preset, coordinates, functions)
+
+
+def _fourier_numbers(coordinate: dict, where: str) -> None:
+    """A Fourier coordinate's ``offset`` and ``rate`` finite numbers; its three lists of finite numbers, of one length."""
+    for key in ("offset", "rate"):
+        _number(coordinate, key, where)
+    lengths = set()
+    for key in ("amplitudes", "harmonics", "phases"):
+        values = coordinate.get(key, [])
+        if not isinstance(values, list):
+            raise SceneError(f"{where}: {key}={values!r} must be a list of finite numbers", key=key, value=values)
+        for index, value in enumerate(values):
+            _number({f"{key}[{index}]": value}, f"{key}[{index}]", where)
+        lengths.add(len(values))
+    if len(lengths) > 1:
+        raise SceneError(f"{where}: amplitudes, harmonics and phases must have the same length")
 
 
 def load_scene(name_or_path: str | Path, overrides: Mapping[str, Any] | None = None, **top_level: Any) -> Scene:
@@ -699,7 +725,12 @@ def _limits(table: dict, where: str) -> FailureLimits:
 
 
 def scene_from_document(data: dict[str, Any], path: Path, base_dir: Path) -> Scene:
-    """Validate a scene's TOML document (``extends`` already merged); relative paths from ``base_dir``."""
+    """Validate a scene's TOML document (``extends`` already merged); relative paths from ``base_dir``.
+
+    The user's extension modules (``CLEARANCE_EXTENSIONS``, :mod:`robot.extensions`) are imported first, in
+    every process that validates a scene (a sweep's workers too), so the names they register are known.
+    """
+    load_extensions()
     document = copy.deepcopy(data)
     data = copy.deepcopy(data)
     where = f"scene {path.name}"
@@ -756,6 +787,7 @@ def scene_from_document(data: dict[str, Any], path: Path, base_dir: Path) -> Sce
         initial_positions=_joint_values(initial, "positions", f"{where} [initial]"),
         initial_velocities=_joint_values(initial, "velocities", f"{where} [initial]"),
         clearance_state=_clearance_state(initial, f"{where} [initial]"),
+        document_clearances=clearances,
     )
 
 

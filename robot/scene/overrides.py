@@ -24,6 +24,9 @@ from robot.errors import SceneError
 
 #: arrays of tables whose entries are addressed by this key (or by index)
 ARRAY_ENTRY_KEYS = {"clearance": "joint", "force": "name"}
+#: keys that choose what kind a table is (a time function, an actuator mode, a friction law): the other keys of
+#: one kind do not fit another, so a table given another kind starts afresh (``extends`` and overrides alike)
+KIND_KEYS = ("function", "mode", "law")
 
 
 def _array_entry(entries: list, name: str, path: str, array: str) -> dict:
@@ -85,11 +88,20 @@ def document_value(document: Mapping[str, Any], path: str) -> Any:
 
 
 def apply_overrides(document: Mapping[str, Any], overrides: Mapping[str, Any]) -> dict:
-    """Return a deep copy of ``document`` with each ``path -> value`` of ``overrides`` set."""
+    """Return a deep copy of ``document`` with each ``path -> value`` of ``overrides`` set.
+
+    A path ending in a :data:`KIND_KEYS` key that changes the table's kind (``friction.law = "none"`` over a
+    Brown-McPhee table) replaces the table by ``{key: value}``; such paths are applied first, so the other keys
+    given with them (``friction.coefficient``) fill the new table, in any order.
+    """
     result = copy.deepcopy(dict(document))
-    for path, value in overrides.items():
+    for path in overrides:
         if not isinstance(path, str) or not path or any(not part for part in path.split(".")):
-            raise SceneError(f"override key path {path!r} must be dotted names such as 'solver.rtol'", key=str(path), value=value)
+            raise SceneError(f"override key path {path!r} must be dotted names such as 'solver.rtol'", key=str(path), value=overrides[path])
+    for path, value in sorted(overrides.items(), key=lambda item: item[0].split(".")[-1] not in KIND_KEYS):
         parts = path.split(".")
-        _container(result, parts, path)[parts[-1]] = copy.deepcopy(value)
+        table = _container(result, parts, path)
+        if parts[-1] in KIND_KEYS and table.get(parts[-1]) != value:
+            table.clear()  # another kind: the old kind's keys do not carry over
+        table[parts[-1]] = copy.deepcopy(value)
     return result

@@ -31,8 +31,17 @@ if TYPE_CHECKING:  # pragma: no cover
 WORLD = "world"
 
 
-class ForceElementError(RobotError):
-    """A force element met a state where its law is undefined (e.g. the two points of a spring coincide)."""
+class ForceElementError(RobotError, ArithmeticError):
+    """A force element met a state where its law is undefined (e.g. the two points of a spring coincide).
+
+    An ``ArithmeticError``: raised inside a run, the step loop stops the run as a
+    failure (cause ``solver error``, the message naming the element) and keeps the
+    records so far.
+    """
+
+
+class NonFiniteForceError(ForceElementError):
+    """A force element gave a non-finite generalized force or scalar output at a finite state."""
 
 
 @dataclass(frozen=True)
@@ -58,9 +67,25 @@ class JointCoordinate:
 class ForceElement(ABC):
     """A force element; subclasses register with :func:`robot.dynamics.forces.registry.register`.
 
-    ``state_dependent``: its law depends on (q, v) (springs, dampers), not only on
-    t through the Jacobians (applied loads). ``actuator``: its power counts as
-    actuator work (a force-driven actuator), not as force-element work.
+    The contract (checked by ``register``; ``docs/dynamics.md``, "Adding a force element"):
+
+    * ``KEYS``: the scene keys of its ``[[force]]`` table besides ``name`` and ``type``;
+    * ``parse(table, where, base_dir)`` (classmethod): the validated parameters,
+      a :class:`SceneError` naming key and value for a bad table (any other
+      ``LookupError``, ``TypeError``, ``ValueError`` or ``ArithmeticError`` it
+      raises becomes a SceneError naming the element and the exception);
+    * ``build(name, parameters, mechanism, where)`` (classmethod): the element,
+      with ``name`` set;
+    * ``apply(kinematics, t, q, v, out)``: adds its generalized force to ``out``
+      (nv) and returns its scalar force or torque (a finite float). A pure
+      function of its arguments: the step loop evaluates a state again when it
+      replays steps. A non-finite result at a finite state stops the run
+      (:class:`NonFiniteForceError`, naming the element);
+    * ``potential_energy(kinematics, q)``: its stored energy (default 0);
+    * ``state_dependent`` (bool): its law depends on (q, v) (springs, dampers),
+      not only on t through the Jacobians (applied loads); ``actuator`` (bool):
+      its power counts as actuator work (a force-driven actuator), not as
+      force-element work.
     """
 
     type_name: ClassVar[str] = ""

@@ -13,12 +13,13 @@ right-hand side then does no extra work).
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
 import pinocchio as pin
 
-from robot.dynamics.forces.base import ForceElement
+from robot.dynamics.forces.base import ForceElement, NonFiniteForceError
 from robot.dynamics.forces.kinematics import PointKinematics
 
 
@@ -58,11 +59,50 @@ class BoundForces:
         kinematics = self.kinematics
         for index, element in enumerate(self.elements):
             self.scalars[index] = element.apply(kinematics, t, q, v, self.from_actuators if element.actuator else self.from_elements)
-        self.powers[0] = self.from_actuators @ v
-        self.powers[1] = self.from_elements @ v
+        self.powers[0] = actuator_power = self.from_actuators @ v
+        self.powers[1] = element_power = self.from_elements @ v
         np.add(self.from_elements, self.from_actuators, out=self.total)
+        # Q . v is non-finite if a component of Q is: one check for every element's force and scalar (~0.3 us)
+        if not math.isfinite(actuator_power + element_power + sum(self.scalars.tolist())):
+            self.raise_for_non_finite_element(t, q, v)
         return self.total
+
+    def raise_for_non_finite_element(self, t: float, q: np.ndarray, v: np.ndarray) -> None:
+        """NonFiniteForceError naming the first element whose force or scalar is not finite at this finite state.
+
+        A non-finite state (a trial stage after a refused contact pose) is not the
+        elements' doing: the solver rejects that step on its non-finite derivative.
+        Each element is evaluated again on its own buffer (``apply`` is a pure function).
+        """
+        if not (math.isfinite(t) and np.isfinite(q).all() and np.isfinite(v).all()):
+            return
+        alone = np.zeros_like(self.total)
+        for element in self.elements:
+            alone[:] = 0.0
+            scalar = element.apply(self.kinematics, t, q, v, alone)
+            problem = _non_finite_output(alone, scalar)
+            if problem is not None:
+                cls = type(element)
+                raise NonFiniteForceError(
+                    f"force element {element.name!r} (type {cls.type_name!r}, class {cls.__module__}.{cls.__qualname__}) {problem} "
+                    f"at t={t:.9g} s from a finite state: fix its apply (where its law is undefined, raise "
+                    "robot.dynamics.forces.ForceElementError saying why)",
+                    key=element.name,
+                )
 
     def potential_energy(self, q: np.ndarray) -> float:
         """Energy stored in the elements at q (same kinematics requirement)."""
         return float(sum(e.potential_energy(self.kinematics, q) for e in self.elements))
+
+
+def _non_finite_output(force: np.ndarray, scalar: object) -> str | None:
+    """What is wrong with an element's generalized force and returned scalar; None if both are finite."""
+    if not np.isfinite(force).all():
+        return f"gave a non-finite generalized force {np.array2string(force, precision=3)}"
+    try:
+        value = float(scalar)  # type: ignore[arg-type]
+    except (TypeError, ValueError):
+        return f"returned {scalar!r} from apply, not its scalar force or torque (a float)"
+    if not math.isfinite(value):
+        return f"returned a non-finite scalar force or torque ({scalar!r})"
+    return None

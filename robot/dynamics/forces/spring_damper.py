@@ -86,7 +86,7 @@ class SpringDamper(ForceElement):
     def _line(self, kinematics) -> tuple[float, np.ndarray]:
         d = kinematics.position(self.point_b) - kinematics.position(self.point_a)
         length = math.sqrt(float(d @ d))
-        if not length > 0.0:
+        if length == 0.0:  # a NaN length is a non-finite state (a rejected trial stage), not this element's failure
             raise ForceElementError(f"spring_damper {self.name!r}: its two points coincide (length {length!r}); the line of action is undefined")
         return length, d / length
 
