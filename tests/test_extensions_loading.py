@@ -24,37 +24,13 @@ from robot.extensions import ExtensionError, extension_names, load_extensions
 
 ROOT = Path(__file__).resolve().parents[1]
 
-EULER_MODULE = '''
-from scipy.integrate import OdeSolver
+#: a user's module: explicit Euler (the class of tests/test_integrator_registry.py), registered under its own name
+EULER_MODULE = """
 from robot.integration import methods
-from robot.integration.dense import HermiteDense
+from test_integrator_registry import ExplicitEuler
 
-
-class UserEuler(OdeSolver):
-    def __init__(self, fun, t0, y0, t_bound, first_step=None, vectorized=False, **extraneous):
-        super().__init__(fun, t0, y0, t_bound, vectorized)
-        self.h = float(first_step)
-        self.f = self.fun(self.t, self.y)
-
-    @property
-    def step_size(self):
-        return self.h
-
-    def _step_impl(self):
-        h = min(self.h, self.t_bound - self.t)
-        self.previous = (self.t, self.y, self.f)
-        self.y = self.y + h * self.f
-        self.t = self.t + h
-        self.f = self.fun(self.t, self.y)
-        return True, None
-
-    def _dense_output_impl(self):
-        t_old, y_old, f_old = self.previous
-        return HermiteDense(t_old, self.t, y_old, f_old, self.y, self.f)
-
-
-methods.register(methods.IntegratorTraits("UserEuler", UserEuler, fixed_step=True, explicit=True, stages=1, replayable=True))
-'''
+methods.register(methods.IntegratorTraits("UserEuler", ExplicitEuler, fixed_step=True, explicit=True, stages=1, replayable=True))
+"""
 
 
 def _scene(folder: Path, step: float) -> Path:
@@ -67,7 +43,7 @@ def _scene(folder: Path, step: float) -> Path:
 
 
 def _clearance(folder: Path, *args: str, modules: str) -> subprocess.CompletedProcess:
-    env = dict(os.environ, CLEARANCE_EXTENSIONS=modules, PYTHONPATH=os.pathsep.join([str(folder), str(ROOT)]))
+    env = dict(os.environ, CLEARANCE_EXTENSIONS=modules, PYTHONPATH=os.pathsep.join([str(folder), str(ROOT / "tests"), str(ROOT)]))
     return subprocess.run([sys.executable, "-m", "robot.cli", *args], cwd=folder, env=env, capture_output=True, text=True, timeout=600)
 
 
