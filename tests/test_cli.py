@@ -7,11 +7,13 @@ ideal scene over a few milliseconds.
 from __future__ import annotations
 
 import importlib
-import re
 import json
 import os
+import re
 import signal
 import stat
+import subprocess
+import sys
 from contextlib import contextmanager
 from pathlib import Path
 
@@ -371,3 +373,15 @@ def test_check_shows_the_scene_description(capsys, tmp_path):
     path = scene_file(tmp_path, 'extends = "ideal"\nname = "described"\ndescription = "a note for the user"\n')
     assert main(["run", "--scene", path, "--check"]) == EXIT_OK
     assert "  a note for the user" in capsys.readouterr().out.splitlines()
+
+
+def test_warnings_are_one_line_without_the_source_echo(tmp_path):
+    """A warning of a command is 'warning: CLASS: message' (Python would add the file, line and source line)."""
+    done = subprocess.run(
+        [sys.executable, "-m", "robot.cli", "run", "--scene", "four_bar", "--t-end", "0.002", "--out", str(tmp_path)],
+        cwd=ROOT, capture_output=True, text=True, timeout=600,
+    )  # fmt: skip
+    assert done.returncode == 0, done.stderr[-2000:]
+    lines = [line for line in done.stderr.splitlines() if "RedundantConstraintWarning" in line]
+    assert lines and all(line.startswith("warning: RedundantConstraintWarning: mechanism 'four_bar'") for line in lines)
+    assert "solve_kkt(" not in done.stderr and ".py:" not in done.stderr

@@ -64,8 +64,24 @@ def _command_of(argv: list[str]) -> str | None:
     return first if first in COMMANDS else None
 
 
+def _warning_line(message, category, filename, lineno, line=None) -> str:
+    """A warning as the commands print it: one line with its class, without the source line Python would echo."""
+    return f"warning: {category.__name__}: {message}\n"
+
+
 def main(argv: list[str] | None = None) -> int:
     """Run ``clearance ARGV``; return the exit code (never raises for a user error)."""
+    import warnings
+
+    previous, warnings.formatwarning = warnings.formatwarning, _warning_line
+    try:
+        return _command(argv)
+    finally:
+        warnings.formatwarning = previous
+
+
+def _command(argv: list[str] | None) -> int:
+    """:func:`main`'s work: the command's exit code."""
     from clearance_contact.errors import ContactError
     from robot.errors import RobotError
     from robot.extensions import load_extensions
