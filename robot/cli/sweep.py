@@ -11,8 +11,10 @@ runs in flight are dropped) and the same command resumes it.
 
 exit codes: 0 every run reached its end; 1 some runs failed (each recorded with
 its cause, the sweep went on), or the sweep was interrupted with runs finished
-(kept in the store; the message says where); 2 bad input, reported before any
-run starts; 130 interrupted before any run finished.
+(kept in the store; the message says where); 2 bad input (a sweep file, an
+analysis parameter, a store of another sweep or a damaged one: --overwrite
+replaces it), reported before any run starts; 130 interrupted before any run
+finished.
 """
 
 from __future__ import annotations

@@ -11,8 +11,11 @@ so the store must be reachable from every worker (a shared filesystem path).
 
 Resuming: runs whose stored ``run_key`` equals the key of their resolved scene
 and whose ``done`` flag is set are skipped; failed runs are redone only with
-``retry_failed``. A store written by a sweep of another layout (other axes,
-values or outputs) is refused unless ``overwrite``.
+``retry_failed``. A store is resumed only by the sweep its attributes describe
+(:func:`store_differences`: layout, scene, t_end, overrides, ...) and only if
+every array of it can be read; another one is refused naming what differs (or
+what is damaged) unless ``overwrite``, which deletes it only once the new
+sweep's probe run succeeded (:func:`_prepare_store`).
 
 Stopping: ``run_sweep(..., stop=...)`` asks ``stop()`` while it waits for the
 runs; once true, the runs not finished are cancelled (those in flight are not
@@ -22,6 +25,7 @@ with the number of runs the store holds (``finished``).
 
 from __future__ import annotations
 
+import json
 import logging
 import os
 import sys
@@ -35,8 +39,11 @@ import numpy as np
 
 from robot.sweep.errors import SweepError
 from robot.sweep.spec import SweepSpec
-from robot.sweep.store import PACKED, Layout, Variable, create_store, existing_layout_key, finished_runs, remove_store, write_run, COUNTS, TIMING
-from robot.sweep.task import RunTask, execute, probe, resolve_parameters
+from robot.sweep.design import python_value
+from robot.sweep.store import (
+    COUNTS, PACKED, RUN_ARRAYS, TIMING, Layout, Variable, check_store, create_store, existing_attrs, open_store, read_array, remove_store, run_ndim, write_run,
+)  # fmt: skip
+from robot.sweep.task import RunTask, blank_record, execute, probe, resolve_parameters
 
 #: environment of every local worker: one thread for every numeric library (processes give the parallelism)
 SINGLE_THREADED = {"OMP_NUM_THREADS": "1", "OPENBLAS_NUM_THREADS": "1", "MKL_NUM_THREADS": "1", "NUMBA_NUM_THREADS": "1"}
@@ -107,36 +114,68 @@ def _field_sizes(fields, shapes: dict[str, tuple[int, ...]], spec, selectors: di
     return sizes
 
 
-def plan_layout(spec: SweepSpec, path: Path, shapes: dict[str, tuple[int, ...]]) -> Layout:
-    """Names, dimensions and sizes of every stored output (from the probe's signal shapes)."""
+def stored_fields(spec: SweepSpec) -> Iterator[tuple[Any, Any, str]]:
+    """(analysis spec, output field, stored name) of every analysis output the store keeps (not those along ``time``)."""
+    from robot.analysis import ANALYSES
+
+    for a in spec.analyses:
+        for f in ANALYSES[a.name].outputs:
+            if "time" not in f.dims:  # per-record outputs vary in length: keep the signal instead ([keep])
+                yield a, f, f"{a.label}_{f.name}"
+
+
+def stored_arrays(spec: SweepSpec) -> tuple[str, ...]:
+    """Every run array of the store of ``spec`` (the packed ones, the array outputs, the kept signals)."""
+    series = [name for _, f, name in stored_fields(spec) if f.dims]
+    kept = [s.name for s in spec.keep.arrays] if spec.keep is not None else []
+    return (*RUN_ARRAYS, *series, *kept)
+
+
+def _output_shapes(a, shapes: dict[str, tuple[int, ...]], document: dict) -> dict[str, tuple[int, ...]]:
+    """The analysis's output shapes for the probe's input shapes; SweepError unless every size is an integer >= 0."""
     from robot.analysis import ANALYSES, AnalysisError
 
+    analysis = ANALYSES[a.name]
+    sizes = _field_sizes(analysis.inputs, shapes, a, a.inputs)
+    try:
+        output_shapes = analysis.output_shapes({"time": 0, **sizes}, **resolve_parameters(a, document))
+    except (AnalysisError, TypeError, ValueError) as exc:
+        raise SweepError(f"analysis {a.label!r}: {exc}", key=a.label, value=a.parameters) from None
+    bad = {name: shape for name, shape in output_shapes.items() if not all(isinstance(n, (int, np.integer)) and n >= 0 for n in shape)}
+    if bad:
+        raise SweepError(
+            f"analysis {a.label!r} ({a.name}): its parameters {a.parameters} give the output shape(s) {bad}; every size must be an integer >= 0: change the parameters",
+            key=a.label,
+            value=a.parameters,
+        )
+    return output_shapes
+
+
+def plan_layout(spec: SweepSpec, path: Path, shapes: dict[str, tuple[int, ...]]) -> Layout:
+    """Names, dimensions and sizes of every stored output (from the probe's signal shapes)."""
     statistics, series, kept = [], {}, {}
     first = spec.scenes[0].document
-    for a in spec.analyses:
-        analysis = ANALYSES[a.name]
-        sizes = _field_sizes(analysis.inputs, shapes, a, a.inputs)
-        try:
-            output_shapes = analysis.output_shapes({"time": 0, **sizes}, **resolve_parameters(a, first))
-        except (AnalysisError, TypeError, ValueError) as exc:
-            raise SweepError(f"analysis {a.label!r}: {exc}", key=a.label, value=a.parameters) from None
-        for f in analysis.outputs:
-            if "time" in f.dims:
-                continue  # per-record outputs vary in length: keep the signal instead ([keep])
-            name = f"{a.label}_{f.name}"
-            if not f.dims:
-                statistics.append(name)
-            else:
-                series[name] = Variable(tuple(f"{a.label}_{d}" for d in f.dims), output_shapes[f.name])
+    output_shapes = {a.label: _output_shapes(a, shapes, first) for a in spec.analyses}
+    for a, f, name in stored_fields(spec):
+        if not f.dims:
+            statistics.append(name)
+        else:
+            series[name] = Variable(tuple(f"{a.label}_{d}" for d in f.dims), output_shapes[a.label][f.name])
     if spec.keep is not None:
         for selector in spec.keep.arrays:
             extra = shapes[selector.text][1:]
             kept[selector.name] = Variable(("time", *(f"{selector.name}_dim{i + 1}" for i in range(len(extra)))), (spec.keep.samples, *extra))
     names = [*statistics, *series, *kept, *COUNTS, *TIMING, *spec.design.coords]
-    clash = sorted({n for n in names if names.count(n) > 1} | (set(names) & {"run_key", "done", "status", "cause", "message", "t_reached", *PACKED, *PACKED.values()}))
+    clash = sorted({n for n in names if names.count(n) > 1} | (set(names) & {*RUN_ARRAYS, *PACKED.values()}))
     if clash:
         raise SweepError(f"sweep {spec.name}: output name(s) {clash} are used twice; change a label or an axis name", key="label", value=clash[0])
     return Layout(str(path), spec.design.dims, spec.design.shape, tuple(statistics), series, kept)
+
+
+#: store attributes that say which runs a store holds: a store is resumed only by a sweep of the same values
+RUN_ATTRIBUTES = ("scene", "t_end", "overrides", "design", "axes", "coordinates", "analyses")
+#: store attributes that only name the sweep (file): brought up to date when a store is resumed
+DESCRIPTIVE = ("sweep", "sweep_file")
 
 
 def store_attrs(spec: SweepSpec) -> dict[str, Any]:
@@ -193,19 +232,75 @@ def dask_client(scheduler: str | None, workers: int | None) -> Iterator[Any]:
 
 
 def _todo(spec: SweepSpec, path: Path, retry_failed: bool) -> list[int]:
-    import zarr
-
-    done, keys = finished_runs(path)
-    status = np.asarray(zarr.open_group(str(path), mode="r")["status"][...]).ravel()
-    expected = np.array(spec.run_keys, dtype=object)
-    valid = done & (keys == expected)
+    group, ndim = open_store(path), len(spec.design.dims)
+    done = read_array(path, group, "done", ndim).ravel()
+    keys = np.asarray(read_array(path, group, "run_key", ndim), dtype=object).ravel()
+    status = read_array(path, group, "status", ndim).ravel()
+    valid = done & (keys == np.array(spec.run_keys, dtype=object))
     if retry_failed:
         valid &= status == 0
     return [i for i in range(spec.design.size) if not valid[i]]
 
 
-def _prepare_store(spec: SweepSpec, path: Path, client, tasks: list[RunTask]) -> Layout:
-    """Probe the first run on every worker (warm-up; the arrays' shapes), then create the store."""
+def _canonical(value: Any) -> Any:
+    """``value`` as its JSON text reads back (as stored attributes do): tuples are lists, numbers exact."""
+    return json.loads(json.dumps(value, sort_keys=True, default=python_value))
+
+
+def _shown(value: Any, limit: int = 120) -> str:
+    text = json.dumps(value, sort_keys=True, default=python_value)
+    return text if len(text) <= limit else text[: limit - 3] + "..."
+
+
+def store_differences(spec: SweepSpec, attrs: dict[str, Any]) -> list[str]:
+    """Why the store of attributes ``attrs`` holds other runs than those of ``spec`` (empty: it holds this sweep's).
+
+    Compared: the layout key (axes, values, outputs, the analyses' output fields) and every attribute
+    that describes the runs (:data:`RUN_ATTRIBUTES`): a store is only ever resumed by the sweep its
+    attributes describe, so they never describe runs other than those it holds.
+    """
+    wanted = store_attrs(spec)
+    differences = []
+    if attrs.get("layout_key") != wanted["layout_key"]:
+        differences.append("the layout (axes, values, outputs or an analysis's output fields)")
+    for name in RUN_ATTRIBUTES:
+        if _canonical(attrs.get(name)) != _canonical(wanted[name]):
+            differences.append(f"{name}: stored {_shown(attrs.get(name))}, this sweep {_shown(wanted[name])}")
+    return differences
+
+
+def store_refusal(spec: SweepSpec, path: Path) -> SweepError | None:
+    """Why the store at ``path`` cannot be resumed by ``spec`` (it holds other runs, or it is damaged), or None
+    (no store, or one this sweep resumes: every array of it there and readable)."""
+    try:
+        attrs = existing_attrs(path)
+        if attrs is None:
+            return None
+        differences = store_differences(spec, attrs)
+        if not differences:
+            check_store(path, stored_arrays(spec), (*spec.design.coords, *PACKED.values()))
+            return None
+    except SweepError as exc:  # damaged: --overwrite replaces it
+        return exc
+    return SweepError(
+        f"{str(path)!r} holds the runs of another sweep ({'; '.join(differences)}): choose another --out, or pass --overwrite "
+        "to replace it (deleted once the new sweep's probe run succeeded; all its runs are made again)",
+        key="out",
+        value=str(path.parent),
+    )
+
+
+def _describe(spec: SweepSpec, path: Path) -> None:
+    """Bring the attributes that only name the sweep file (:data:`DESCRIPTIVE`) up to date in a store it resumes."""
+    wanted = {k: v for k, v in store_attrs(spec).items() if k in DESCRIPTIVE}
+    group = open_store(path)
+    if any(_canonical(group.attrs.get(k)) != _canonical(v) for k, v in wanted.items()):
+        open_store(path, mode="r+").attrs.update(wanted)
+
+
+def _prepare_store(spec: SweepSpec, path: Path, client, tasks: list[RunTask], replace: bool) -> Layout:
+    """Probe the first run on every worker (warm-up; the arrays' shapes), plan the layout, then create the store:
+    an old one (``replace``) is deleted only now, once the new sweep is known to start."""
     try:
         probes = client.run(probe, tasks[0])
     except SweepError:
@@ -214,16 +309,20 @@ def _prepare_store(spec: SweepSpec, path: Path, client, tasks: list[RunTask]) ->
         raise SweepError(f"sweep {spec.name}: the probe run of the first point failed: {type(exc).__name__}: {exc}", key="probe", value=spec.design.points[0]) from None
     shapes = next(iter(probes.values()))["shapes"]
     layout = plan_layout(spec, path, shapes)
-    create_store(layout, spec.design.coords, store_attrs(spec))
+    if replace:
+        remove_store(path)
+    try:
+        create_store(layout, spec.design.coords, store_attrs(spec))
+    except Exception as exc:  # noqa: BLE001 - a store half created is no store: removed
+        remove_store(path)
+        raise SweepError(f"sweep {spec.name}: the store at {str(path)!r} could not be created ({type(exc).__name__}: {exc}); check --out", key="out", value=str(path.parent)) from None
     return layout
 
 
 def _layout_of_store(spec: SweepSpec, path: Path) -> Layout:
-    import zarr
-
-    group = zarr.open_group(str(path), mode="r")
-    statistics = tuple(str(n) for n in group["statistic"][...])
-    fixed = {"run_key", "done", "status", "cause", "message", "t_reached", *PACKED, *PACKED.values(), *spec.design.coords}
+    group = open_store(path)
+    statistics = tuple(str(n) for n in read_array(path, group, "statistic"))
+    fixed = {*RUN_ARRAYS, *PACKED.values(), *spec.design.coords}
     series, kept = {}, {}
     kept_names = {s.name for s in spec.keep.arrays} if spec.keep else set()
     for name in group.array_keys():
@@ -277,7 +376,7 @@ def _run_tasks(client, tasks: list[RunTask], layout: Layout, bar, stop: Callable
             summary = future.result()
         except Exception as exc:  # the worker died or the task could not run: the driver records it
             message = f"{type(exc).__name__}: {exc}"
-            write_run(layout, task.index, {"run_key": task.key, "status": -1, "cause": "worker error", "message": message})
+            write_run(layout, task.index, {**blank_record(task, layout), "status": -1, "cause": "worker error", "message": message})
             summary = {"flat": task.flat, "status": -1, "cause": "worker error", "message": message}
         failed += summary["status"] != 0
         summaries.append(summary)
@@ -290,20 +389,28 @@ def _run_tasks(client, tasks: list[RunTask], layout: Layout, bar, stop: Callable
 
 def store_causes(path: Path) -> dict[str, int]:
     """Failed runs of the store, by cause."""
-    import zarr
-
-    group = zarr.open_group(str(path), mode="r")
-    status = np.asarray(group["status"][...]).ravel()
-    causes = np.asarray(group["cause"][...], dtype=object).ravel()
+    group = open_store(path)
+    ndim = run_ndim(path, group)
+    status = read_array(path, group, "status", ndim).ravel()
+    causes = np.asarray(read_array(path, group, "cause", ndim), dtype=object).ravel()
     out: dict[str, int] = {}
     for cause in causes[status == -1]:
         out[str(cause)] = out.get(str(cause), 0) + 1
     return out
 
 
+def _holds(spec: SweepSpec, path: Path) -> bool:
+    """There is a store at ``path`` and it is the one of ``spec`` (an interrupted ``--overwrite`` may have kept the old one)."""
+    try:
+        attrs = existing_attrs(path)
+    except SweepError:  # a damaged root, not replaced
+        return False
+    return attrs is not None and not store_differences(spec, attrs)
+
+
 def finished_count(spec: SweepSpec, path: Path) -> int:
     """Runs of ``spec`` the store at ``path`` holds (done with their current key, failed ones included)."""
-    if existing_layout_key(path) != spec.layout_key:
+    if not _holds(spec, path):
         return 0
     return spec.design.size - len(_todo(spec, path, retry_failed=False))
 
@@ -327,24 +434,21 @@ def run_sweep(
     stop = stop or _never
     started = time.perf_counter()
     path = Path(out) / "sweep.zarr"
-    existing = existing_layout_key(path)
-    if existing is not None and existing != spec.layout_key:
-        if not overwrite:
-            raise SweepError(
-                f"{str(path)!r} holds another sweep (other axes, values or outputs); choose another --out or pass --overwrite",
-                key="out",
-                value=str(out),
-            )
-        remove_store(path)
-        existing = None
+    refusal = store_refusal(spec, path)
+    if refusal is not None and not overwrite:
+        raise refusal
+    replace = refusal is not None  # deleted by _prepare_store once the probe run succeeded
+    create = replace or not (path / "zarr.json").is_file()
     tasks = make_tasks(spec)
-    todo = list(range(len(tasks))) if existing is None else _todo(spec, path, retry_failed)
+    todo = list(range(len(tasks))) if create else _todo(spec, path, retry_failed)
     outcome = SweepOutcome(path, len(tasks), skipped=len(tasks) - len(todo))
+    if not create:
+        _describe(spec, path)
     if todo:
         path.parent.mkdir(parents=True, exist_ok=True)
         try:
             with dask_client(scheduler, workers) as client:
-                layout = _prepare_store(spec, path, client, tasks) if existing is None else _layout_of_store(spec, path)
+                layout = _prepare_store(spec, path, client, tasks, replace) if create else _layout_of_store(spec, path)
                 with _progress(len(todo), progress) as bar:
                     submitted = time.perf_counter()
                     outcome.summaries = _run_tasks(client, [tasks[i] for i in todo], layout, bar, stop)
@@ -357,6 +461,6 @@ def run_sweep(
         outcome.interrupted = outcome.ran < len(todo)
     if outcome.interrupted:
         outcome.finished = finished_count(spec, path)
-    outcome.causes = store_causes(path) if existing_layout_key(path) is not None else {}
+    outcome.causes = store_causes(path) if _holds(spec, path) else {}
     outcome.wall_time = time.perf_counter() - started
     return outcome

@@ -85,7 +85,7 @@ def _positions(values) -> tuple[np.ndarray, list[str] | None]:
 
 
 def draw_lines(dataset, figure: dict, out: Path):
-    from robot.analysis.figures import new_figure, save_png
+    from robot.analysis.figures import new_figure
 
     x, by = figure["x"], figure.get("by")
     data = selected(dataset, figure, (x, by) if by else (x,))

@@ -58,6 +58,12 @@ def plotly_figure(title: str, traces: list[dict]):
 
 
 def _summary(dataset) -> str:
+    damage = dataset.attrs.get("damaged", [])
+    damaged = f"<p style='color:#b00'>damaged store: these values cannot be read and are shown as missing: {html.escape('; '.join(damage))}</p>" if damage else ""
+    return damaged + _runs_summary(dataset)
+
+
+def _runs_summary(dataset) -> str:
     status = dataset["status"].values.ravel()
     causes = dataset["cause"].values.ravel()
     messages = dataset["message"].values.ravel()
@@ -73,10 +79,16 @@ def _summary(dataset) -> str:
 
 def draw_all(spec, store: Path, out: Path) -> list[Path]:
     """Draw every figure of ``spec`` (PNG in ``out/figures``) and ``out/report.html``; returns the paths."""
-    from robot.analysis.figures import save_png
-    from robot.sweep.store import open_sweep
+    return draw_report(spec, store, out)[0]
 
-    dataset = open_sweep(store).load()
+
+def draw_report(spec, store: Path, out: Path) -> tuple[list[Path], list[str]]:
+    """:func:`draw_all`, and the store's values that could not be read (a damaged store: drawn as missing
+    values and listed in the report, "ARRAY at run(s) ..."; empty for a sound store)."""
+    from robot.analysis.figures import save_png
+    from robot.sweep.store import load_dataset
+
+    dataset = load_dataset(store)
     out = Path(out)
     written, sections, first = [], [], True
     for i, figure in enumerate(spec.figures):
@@ -96,4 +108,4 @@ def draw_all(spec, store: Path, out: Path) -> list[Path]:
         f"{spec.design.kind} design over {html.escape(axes)}; store {html.escape(str(store))}</p>{_summary(dataset)}{''.join(sections)}</body></html>"
     )
     written.append(atomic_write_text(out / "report.html", page))
-    return written
+    return written, list(dataset.attrs.get("damaged", []))

@@ -302,6 +302,78 @@ def _analysis(table: Any, where: str) -> AnalysisSpec:
     return AnalysisSpec(name, label, inputs, {k: v for k, v in table.items() if k in parameters})
 
 
+def resolve_parameters(analysis: AnalysisSpec, document: dict) -> dict[str, Any]:
+    """Parameter values, with ``"@KEY.PATH"`` replaced by the scene's value there."""
+    from robot.scene.overrides import document_value
+
+    return {
+        name: document_value(document, value[len(SCENE_REFERENCE):]) if isinstance(value, str) and value.startswith(SCENE_REFERENCE) else value
+        for name, value in analysis.parameters.items()
+    }
+
+
+class _InputsReached(BaseException):
+    """Raised by a :class:`_Placeholder` input (a BaseException: an analysis's ``except Exception`` lets it through)."""
+
+
+class _Placeholder:
+    """An input that stops an analysis the moment it is read: what the analysis raised before had
+    come from its parameters alone (:func:`check_parameters`)."""
+
+    def _reached(self, *args: Any, **kwargs: Any) -> Any:
+        raise _InputsReached
+
+    __array__ = __len__ = __iter__ = __getitem__ = __float__ = __int__ = __index__ = __bool__ = __contains__ = _reached
+    __add__ = __radd__ = __sub__ = __rsub__ = __mul__ = __rmul__ = __truediv__ = __rtruediv__ = __pow__ = __neg__ = __abs__ = _reached
+    __lt__ = __le__ = __gt__ = __ge__ = __eq__ = __ne__ = _reached
+    __hash__ = None  # type: ignore[assignment]
+
+    def __getattr__(self, name: str) -> Any:
+        raise _InputsReached
+
+
+def check_parameters(spec: AnalysisSpec, scenes: tuple[Scene, ...], where: str) -> None:
+    """SweepError naming the analysis, the parameter and its value if the analysis refuses the parameters of
+    any run: it is called with placeholder inputs, so what it raises before it reads one is its own check
+    of the parameters alone (``require_positive`` and co., ``robot/analysis/errors.py``), which every run would fail."""
+    from robot.analysis import ANALYSES
+
+    analysis = ANALYSES[spec.name]
+    inputs = {name: _Placeholder() for name in spec.inputs} | ({"run": _Placeholder()} if analysis.needs_run else {})
+    checked: set[str] = set()
+    for i, scene in enumerate(scenes):
+        try:
+            parameters = resolve_parameters(spec, scene.document)
+        except SceneError as exc:
+            raise SweepError(f"{where} analysis {spec.label!r} ({spec.name}): a parameter refers to no key of run {i}'s scene: {exc}", key=spec.label, value=spec.parameters) from None
+        token = repr(sorted(parameters.items()))
+        if token in checked:
+            continue
+        checked.add(token)
+        try:
+            analysis.function(**inputs, **parameters)
+        except _InputsReached:
+            continue
+        except Exception as exc:  # noqa: BLE001 - whatever the parameters alone make it raise, every run would
+            run = f", run {i}" if parameters != spec.parameters else ""  # a value read from the run's scene
+            raise _refused(spec, parameters, exc, f"{where} analysis {spec.label!r} ({spec.name}){run}") from None
+
+
+def _refused(spec: AnalysisSpec, parameters: dict[str, Any], exc: Exception, where: str) -> SweepError:
+    """The SweepError of an analysis that refused its parameters: which one (its key), the value, the analysis's reason."""
+    from robot.analysis import AnalysisError
+
+    text, key = str(exc), getattr(exc, "key", None)
+    name = key if key in parameters else next((p for p in parameters if text.startswith(f"{p}=")), None)
+    given = "" if name is None or spec.parameters.get(name) == parameters[name] else f" ({name} = {spec.parameters[name]!r} is {parameters[name]!r} there)"
+    reason = text if isinstance(exc, AnalysisError) else f"{type(exc).__name__}: {text}"
+    return SweepError(
+        f"{where}: {reason}{given}; change the parameter in its [[analysis]] (or [statistics]) table",
+        key=f"{spec.label}.{name}" if name else spec.label,
+        value=parameters.get(name) if name else parameters,
+    )
+
+
 def _keep(data: dict, where: str) -> KeepSpec | None:
     if "keep" not in data:
         return None
@@ -410,5 +482,7 @@ def load_sweep(source: str | Path | Mapping[str, Any], *, base_dir: str | Path |
     if not isinstance(name, str) or not name:
         raise SweepError(f"{where} [sweep]: name={name!r} must be a non-empty string", key="sweep.name", value=name)
     spec = SweepSpec(name, path, base, t_end, dict(overrides), axes, design, tuple(analyses), _keep(data, where), tuple(figures), _resolve_scenes(base, axes, design))
+    for analysis in spec.analyses:
+        check_parameters(analysis, spec.scenes, where)
     check_figures(spec)
     return spec

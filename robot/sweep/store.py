@@ -108,16 +108,36 @@ def create_store(layout: Layout, coords: dict, attrs: dict[str, Any]) -> None:
     group.attrs.update({"format": FORMAT, **attrs})
 
 
-def existing_layout_key(path: str | Path) -> str | None:
-    """The layout key of the sweep stored at ``path`` (None if there is no store)."""
+def damaged(path: str | Path, what: str, exc: BaseException | None = None) -> SweepError:
+    """The error of a store that cannot be read as written: names the store and the array, says how to recover."""
+    cause = f" ({type(exc).__name__}: {exc})" if exc is not None else ""
+    return SweepError(
+        f"the sweep store at {str(path)!r} is damaged: {what}{cause}; rerun with --overwrite (its runs are made again) or delete it",
+        key="store",
+        value=str(path),
+    )
+
+
+def open_store(path: str | Path, mode: str = "r"):
+    """The store's zarr group; a root that cannot be read is a damaged store (:func:`damaged`)."""
     import zarr
 
+    try:
+        return zarr.open_group(str(path), mode=mode)
+    except Exception as exc:  # noqa: BLE001 - zarr raises many kinds for a bad root: all mean the same here
+        raise damaged(path, "its root metadata (zarr.json) cannot be read", exc) from None
+
+
+def existing_layout_key(path: str | Path) -> str | None:
+    """The layout key of the sweep stored at ``path`` (None if there is no store)."""
+    return None if (attrs := existing_attrs(path)) is None else attrs.get("layout_key")
+
+
+def existing_attrs(path: str | Path) -> dict[str, Any] | None:
+    """The attributes of the store at ``path`` (None if there is none; SweepError if it cannot be read)."""
     if not (Path(path) / "zarr.json").is_file():
         return None
-    try:
-        return zarr.open_group(str(path), mode="r").attrs.get("layout_key")
-    except Exception as exc:  # an unreadable folder is not a store this tool wrote
-        raise SweepError(f"{str(path)!r} exists but is not a readable sweep store ({exc}); choose another --out", key="out", value=str(path)) from None
+    return dict(open_store(path).attrs)
 
 
 def remove_store(path: str | Path) -> None:
@@ -125,49 +145,147 @@ def remove_store(path: str | Path) -> None:
         shutil.rmtree(path)
 
 
+def read_array(path: str | Path, group, name: str, run_ndim: int = 0) -> np.ndarray:
+    """The whole array ``name`` of the store at ``path`` (``group``: opened); SweepError (a damaged store)
+    naming the array, and the runs (its first ``run_ndim`` dimensions) whose chunk cannot be read."""
+    try:
+        array = group[name]
+    except Exception as exc:  # noqa: BLE001 - a missing or unreadable zarr.json
+        raise damaged(path, f"array {name!r} is missing or its metadata cannot be read", exc) from None
+    try:
+        return np.asarray(array[...])
+    except Exception as exc:  # noqa: BLE001 - a truncated or corrupt chunk (decompression, decoding, shape)
+        where = f" at run(s) {shown_runs(damaged_runs(array, run_ndim))}" if run_ndim else ""
+        raise damaged(path, f"array {name!r} cannot be read{where}", exc) from None
+
+
+def damaged_runs(array, run_ndim: int) -> list[tuple[int, ...]]:
+    """The run indices (the first ``run_ndim`` dimensions) whose chunk of ``array`` cannot be read."""
+    bad = []
+    for index in np.ndindex(*array.shape[:run_ndim]):
+        try:
+            array[index]
+        except Exception:  # noqa: BLE001 - any failure to read the chunk
+            bad.append(index)
+    return bad
+
+
+def shown_runs(runs: list[tuple[int, ...]], limit: int = 10) -> str:
+    text = ", ".join(str(r) for r in runs[:limit])
+    return text + (f" and {len(runs) - limit} more" if len(runs) > limit else "")
+
+
 def finished_runs(path: str | Path) -> tuple[np.ndarray, np.ndarray]:
     """``done`` and ``run_key`` of every run (flat, C order)."""
-    import zarr
+    group = open_store(path)
+    ndim = run_ndim(path, group)
+    return read_array(path, group, "done", ndim).ravel(), np.asarray(read_array(path, group, "run_key", ndim), dtype=object).ravel()
 
-    group = zarr.open_group(str(path), mode="r")
-    return np.asarray(group["done"][...]).ravel(), np.asarray(group["run_key"][...], dtype=object).ravel()
+
+def run_ndim(path: str | Path, group) -> int:
+    """The number of run dimensions of the store (those of ``done``)."""
+    try:
+        return len(group["done"].shape)
+    except Exception as exc:  # noqa: BLE001 - a missing or unreadable zarr.json
+        raise damaged(path, "array 'done' is missing or its metadata cannot be read", exc) from None
+
+
+#: the arrays every store has besides its coordinates and the outputs of its analyses and [keep]
+RUN_ARRAYS = ("run_key", "status", "cause", "message", "t_reached", *PACKED, "done")
+
+
+def check_store(path: str | Path, arrays: tuple[str, ...], coordinates: tuple[str, ...]) -> None:
+    """SweepError (a damaged store) unless each of the run ``arrays`` and ``coordinates`` is there and every
+    chunk of it can be read (every value is read once: a resumed sweep trusts what it keeps)."""
+    group = open_store(path)
+    ndim = run_ndim(path, group)
+    for name in coordinates:
+        read_array(path, group, name)
+    for name in arrays:
+        read_array(path, group, name, ndim)
 
 
 _OPEN: dict[str, dict[str, Any]] = {}
 
 
-def _arrays(path: str) -> dict[str, Any]:
-    """The store's arrays, opened once per process (workers keep them between runs)."""
-    if path not in _OPEN:
-        import zarr
-
-        group = zarr.open_group(path, mode="r+")
-        _OPEN[path] = {name: group[name] for name in group.array_keys()}
-    return _OPEN[path]
+def _arrays(layout: Layout) -> dict[str, Any]:
+    """The store's arrays, opened once per process and layout (workers keep them between runs; a store
+    replaced by one of another layout at the same path is opened again)."""
+    token = repr(layout)
+    if token not in _OPEN:
+        group = open_store(layout.path, mode="r+")
+        _OPEN[token] = {name: group[name] for name in group.array_keys()}
+    return _OPEN[token]
 
 
 def write_run(layout: Layout, index: tuple[int, ...], record: dict[str, Any]) -> None:
     """Write one run's values into its region; ``done`` last (a run is done only once complete)."""
-    arrays = _arrays(layout.path)
+    arrays = _arrays(layout)
     for name, value in record.items():
         arrays[name][index] = value
     arrays["done"][index] = True
 
 
-def open_sweep(path: str | Path):
-    """The sweep store as an ``xarray.Dataset``: packed ``counts``, ``timings`` and ``statistics``
-    unpacked into one variable per name, the axes as coordinates."""
+def _raw_dataset(path: str | Path):
+    """The store as xarray reads it (packed, lazy); SweepError if it is no store of this tool or its metadata is damaged."""
     import xarray as xr
 
     if not (Path(path) / "zarr.json").is_file():
         raise SweepError(f"{str(path)!r} is not a sweep store (no zarr.json)", key="store", value=str(path))
-    dataset = xr.open_zarr(str(path), consolidated=False)
+    try:
+        dataset = xr.open_zarr(str(path), consolidated=False)
+    except Exception as exc:  # noqa: BLE001 - metadata or a coordinate that cannot be read
+        raise damaged(path, "its metadata or coordinates cannot be read", exc) from None
     if dataset.attrs.get("format") != FORMAT:
         raise SweepError(f"{str(path)!r} is not a sweep store of this tool (format {dataset.attrs.get('format')!r})", key="store", value=str(path))
+    missing = [name for name in RUN_ARRAYS if name not in dataset]
+    if missing:
+        raise damaged(path, f"array(s) {missing} are missing")
+    return dataset
+
+
+def _unpacked(dataset):
+    """The axes as coordinates; packed ``counts``, ``timings`` and ``statistics`` as one variable per name."""
     dataset = dataset.set_coords([c for c in dataset.attrs.get("coordinates", []) if c in dataset])
     for packed, dim in PACKED.items():
         names = [str(n) for n in dataset[dim].values]
         for i, name in enumerate(names):
             dataset[name] = dataset[packed].isel({dim: i}, drop=True)
         dataset = dataset.drop_vars([packed, dim])
+    return dataset
+
+
+def open_sweep(path: str | Path):
+    """The sweep store as an ``xarray.Dataset``: packed ``counts``, ``timings`` and ``statistics``
+    unpacked into one variable per name, the axes as coordinates."""
+    return _unpacked(_raw_dataset(path))
+
+
+def _readable_values(array, ndim: int, bad: list[tuple[int, ...]]) -> np.ndarray:
+    """The array's values, its fill value in the runs ``bad`` (whose chunk cannot be read)."""
+    skipped = set(bad)
+    good = [index for index in np.ndindex(*array.shape[:ndim]) if index not in skipped]
+    first = np.asarray(array[good[0]]) if good else np.asarray(array.fill_value)
+    values = np.full(array.shape, array.fill_value, dtype=first.dtype if first.dtype.kind != "U" else object)
+    for index in good:
+        values[index] = array[index]
+    return values
+
+
+def load_dataset(path: str | Path):
+    """:func:`open_sweep`'s dataset read into memory, for reports: a run's value whose chunk cannot be read
+    is its array's fill value (NaN, 'not run') and is listed in ``attrs["damaged"]`` ("ARRAY at run(s) ...")."""
+    dataset = _raw_dataset(path)
+    group = open_store(path)
+    ndim = run_ndim(path, group)
+    damage = []
+    for name in list(dataset.data_vars):
+        try:
+            dataset[name] = dataset[name].load()
+        except Exception:  # noqa: BLE001 - a chunk that cannot be read: find the runs, keep the rest
+            bad = damaged_runs(group[name], ndim)
+            dataset[name] = (dataset[name].dims, _readable_values(group[name], ndim, bad), dataset[name].attrs)
+            damage.append(f"{name} at run(s) {shown_runs(bad)}")
+    dataset = _unpacked(dataset.load())
+    dataset.attrs["damaged"] = damage
     return dataset

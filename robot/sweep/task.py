@@ -17,7 +17,7 @@ from typing import Any
 
 import numpy as np
 
-from robot.sweep.spec import SCENE_REFERENCE, AnalysisSpec, KeepSpec
+from robot.sweep.spec import AnalysisSpec, KeepSpec, resolve_parameters
 from robot.sweep.store import COUNTS, Layout, write_run
 
 #: a probe run's horizon (s): enough for a few records, to learn the arrays' shapes
@@ -53,16 +53,6 @@ def scene_of(task: RunTask, horizon: float | None = None):
     return scene
 
 
-def resolve_parameters(analysis: AnalysisSpec, document: dict) -> dict[str, Any]:
-    """Parameter values, with ``"@KEY.PATH"`` replaced by the scene's value there."""
-    from robot.scene.overrides import document_value
-
-    return {
-        name: document_value(document, value[len(SCENE_REFERENCE):]) if isinstance(value, str) and value.startswith(SCENE_REFERENCE) else value
-        for name, value in analysis.parameters.items()
-    }
-
-
 def _simulate(task: RunTask, horizon: float | None = None):
     from robot.run import build_run, run_scene
     from robot.sweep.signals import RunSignals
@@ -94,26 +84,41 @@ def kept_values(selector, signals, t: np.ndarray, kind: np.ndarray, keep: KeepSp
     return out
 
 
-def analyse(task: RunTask, signals, layout: Layout) -> tuple[np.ndarray, dict[str, np.ndarray]]:
-    """Every analysis of the run: the packed scalar statistics and the array outputs."""
+def analyse(task: RunTask, signals, layout: Layout) -> tuple[np.ndarray, dict[str, np.ndarray], list[str]]:
+    """Every analysis of the run: the packed scalar statistics, the array outputs, and one message per
+    analysis that failed (its outputs stay NaN; the others' are kept)."""
     from robot.analysis import ANALYSES
 
     statistics = np.full(len(layout.statistics), np.nan)
     position = {name: i for i, name in enumerate(layout.statistics)}
-    series = {}
+    series, failures = {}, []
     for spec in task.analyses:
         analysis = ANALYSES[spec.name]
-        arguments = {name: selector(signals) for name, selector in spec.inputs.items()}
-        if analysis.needs_run:
-            arguments["run"] = signals.run
-        outputs = analysis(**arguments, **resolve_parameters(spec, task.document))
+        try:
+            arguments = {name: selector(signals) for name, selector in spec.inputs.items()}
+            if analysis.needs_run:
+                arguments["run"] = signals.run
+            outputs = analysis(**arguments, **resolve_parameters(spec, task.document))
+        except Exception as exc:  # this analysis cannot handle this run: the run is recorded as failed, naming it
+            failures.append(f"analysis {spec.label!r} ({spec.name}): {type(exc).__name__}: {exc}")
+            continue
         for output, value in outputs.items():
             name = f"{spec.label}_{output}"
             if name in position:
                 statistics[position[name]] = float(value)
             elif name in layout.series:
                 series[name] = value
-    return statistics, series
+    return statistics, series, failures
+
+
+def blank_record(task: RunTask, layout: Layout) -> dict[str, Any]:
+    """A run's values before it is made: NaN outputs, uncounted counts. Written under the run's own values,
+    so a run made again never keeps a value of its former make that it did not produce (a fill value
+    is stored as no chunk: a run that produces every value is written as before, byte for byte)."""
+    record: dict[str, Any] = {"run_key": task.key, "t_reached": np.nan, "counts": np.full(len(COUNTS), -1, dtype=np.int64)}
+    record["statistics"] = np.full(len(layout.statistics), np.nan)
+    record.update({name: np.full(variable.shape, np.nan) for name, variable in {**layout.series, **layout.kept}.items()})
+    return record
 
 
 def _counts(result) -> np.ndarray:
@@ -132,7 +137,7 @@ def execute(task: RunTask, layout: Layout) -> dict[str, Any]:
     writes (the stored ``timings`` cannot: they are written with the run).
     """
     started_wall, started_cpu = time.perf_counter(), time.process_time()
-    record: dict[str, Any] = {"run_key": task.key}
+    record = blank_record(task, layout)
     integration = (np.nan, np.nan, np.nan)
     try:
         result, signals = _simulate(task)
@@ -140,11 +145,10 @@ def execute(task: RunTask, layout: Layout) -> dict[str, Any]:
         integration = (simulated, result.counts.get("wall_time", np.nan), result.counts.get("cpu_time", np.nan))
         record.update(status=result.status, cause=result.cause or NO_CAUSE, message=result.message or "", t_reached=result.t_end, counts=_counts(result))
         if result.success:
-            try:
-                record["statistics"], series = analyse(task, signals, layout)
-                record.update(series)
-            except Exception as exc:  # an analysis that cannot handle this run: the run is recorded as failed
-                record.update(status=-1, cause="analysis error", message=f"{type(exc).__name__}: {exc}")
+            record["statistics"], series, failures = analyse(task, signals, layout)
+            record.update(series)
+            if failures:  # the other analyses' outputs are kept
+                record.update(status=-1, cause="analysis error", message="; ".join(failures))
         if task.keep is not None:
             kind, t = result["record_kind"], result.t
             for selector in task.keep.arrays:
