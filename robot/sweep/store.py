@@ -110,9 +110,9 @@ def create_store(layout: Layout, coords: dict, attrs: dict[str, Any]) -> None:
 
 def damaged(path: str | Path, what: str, exc: BaseException | None = None) -> SweepError:
     """The error of a store that cannot be read as written: names the store and the array, says how to recover."""
-    cause = f" ({type(exc).__name__}: {exc})" if exc is not None else ""
+    reason = f" ({type(exc).__name__}: {exc})" if exc is not None else ""
     return SweepError(
-        f"the sweep store at {str(path)!r} is damaged: {what}{cause}; rerun with --overwrite (its runs are made again) or delete it",
+        f"the sweep store at {str(path)!r} is damaged: {what}{reason}; rerun with --overwrite (its runs are made again) or delete it",
         key="store",
         value=str(path),
     )
