@@ -51,14 +51,13 @@ from __future__ import annotations
 
 import inspect
 import math
-import numbers
 from collections.abc import Mapping
 from typing import Callable, Iterator
 
 import numpy as np
 
 from .compiled import jit
-from .errors import ContactParameterError, require_in_range
+from .errors import ContactParameterError, real_number, require_in_range, require_unregistered
 from .normal_force import hysteresis_damping_factor, hysteresis_factor
 
 __all__ = [
@@ -143,13 +142,7 @@ def register_dissipation_model(name: str, chi: Callable[[float], float]) -> Call
     """
     if not isinstance(name, str) or not name.isidentifier():
         raise ContactParameterError(f"dissipation model name {name!r} must be a non-empty identifier", key="dissipation", value=name)
-    if name in _MODELS:
-        held = _MODELS[name]
-        raise ContactParameterError(
-            f"dissipation model {name!r} is already registered ({getattr(held, '__module__', '?')}."
-            f"{getattr(held, '__qualname__', repr(held))}); choose another name (registered: {', '.join(_MODELS)})",
-            key="dissipation", value=name,
-        )  # fmt: skip
+    require_unregistered("dissipation model", name, _MODELS.get(name), chi, _MODELS, key="dissipation")
     _require_one_argument(name, chi)
     _MODELS[name] = chi
     return chi
@@ -203,13 +196,14 @@ def dissipation_factor(name: str, restitution: float) -> float:
         raise ContactParameterError(
             f"dissipation model {name!r} raised {type(exc).__name__} at c_e={ce!r}: {exc}", key="dissipation", value=name
         ) from exc
-    if isinstance(chi, bool) or not isinstance(chi, numbers.Real) or not (math.isfinite(chi) and chi >= 0.0):
+    value = real_number(chi)
+    if value is None or not (math.isfinite(value) and value >= 0.0):
         raise ContactParameterError(
             f"dissipation model {name!r} gives chi={chi!r} at c_e={ce!r}: chi must be a finite real number in the valid "
             "range [0, inf) (a negative chi adds energy at each impact); fix the model's formula",
             key="dissipation", value=name,
         )  # fmt: skip
-    return float(chi)
+    return value
 
 
 def dissipation_encoding(name: str, restitution: float) -> np.ndarray:

@@ -12,6 +12,7 @@ the revolute joint), so that all messages share one format.
 from __future__ import annotations
 
 import math
+import numbers
 
 import numpy as np
 
@@ -19,6 +20,8 @@ __all__ = [
     "ClearanceMechanismsError",
     "ContactError",
     "ContactParameterError",
+    "real_number",
+    "require_unregistered",
     "require_finite",
     "require_positive",
     "require_non_negative",
@@ -56,6 +59,39 @@ class ContactParameterError(ContactError, ValueError):
 
     Subclass of :class:`ValueError` so that generic callers can catch it too.
     """
+
+
+def real_number(value: object) -> float | None:
+    """``value`` as a float if it is one real number (a Python or numpy scalar, a 0-d numeric array), else None.
+
+    Booleans and strings are not numbers here: a user's law returning ``True`` or ``"0.2"`` is a mistake.
+    """
+    if isinstance(value, np.ndarray):
+        if value.shape != () or value.dtype.kind not in "fiu":
+            return None
+        value = value.item()
+    if isinstance(value, (bool, np.bool_)) or not isinstance(value, numbers.Real):
+        return None
+    return float(value)
+
+
+def _origin(definition: object) -> str:
+    """Where a function or class is defined: ``module.qualname`` (the same for a reloaded module's definition)."""
+    return f"{getattr(definition, '__module__', None) or '?'}.{getattr(definition, '__qualname__', None) or definition!r}"
+
+
+def require_unregistered(what: str, name: str, held: object | None, new: object, registered, key: str) -> None:
+    """ContactParameterError if ``name`` is registered to another definition than ``new``.
+
+    The same definition again (same module and qualified name: a module reloaded, a notebook cell run twice)
+    may register again; a shipped entry cannot be replaced by another.
+    """
+    if held is None or _origin(held) == _origin(new):
+        return
+    raise ContactParameterError(
+        f"{what} {name!r} is already registered by {_origin(held)}; choose another name (registered: {', '.join(registered)})",
+        key=key, value=name,
+    )  # fmt: skip
 
 
 def require_finite(name: str, value: float) -> float:

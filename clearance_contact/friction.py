@@ -56,7 +56,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from .compiled import jit
-from .errors import ClearanceMechanismsError, ContactError, ContactLawError, ContactParameterError, require_non_negative, require_positive
+from .errors import ClearanceMechanismsError, ContactError, ContactLawError, ContactParameterError, real_number, require_non_negative, require_positive, require_unregistered
 
 __all__ = [
     "FrictionLaw",
@@ -430,14 +430,15 @@ def user_friction_gain(law, normal_force: float, slip_speed: float) -> float:
     for anything else, or when the law raises.
     """
     g = _call_law(law, "force_over_speed", normal_force, slip_speed)
-    if isinstance(g, bool) or not isinstance(g, numbers.Real) or not (math.isfinite(g) and g >= 0.0):
+    value = real_number(g)
+    if value is None or not (math.isfinite(value) and value >= 0.0):
         raise ContactLawError(
             f"friction law {_law_name(law)}: force_over_speed(normal_force={normal_force!r}, slip_speed={slip_speed!r}) "
             f"= {g!r} is outside the valid range [0, inf) of g = f/v (a real number; a negative g pushes along the "
             "slip and creates energy)",
             key="friction", value=g,
         )  # fmt: skip
-    return float(g)
+    return value
 
 
 def user_friction_force(law, normal_force: float, slip_velocity: np.ndarray) -> np.ndarray:
@@ -611,13 +612,7 @@ def register_friction_law(
         return lambda decorated: register_friction_law(name, decorated, keys, law_class=law_class, describe=describe)
     if not isinstance(name, str) or not name.isidentifier():
         raise ContactParameterError(f"friction law name {name!r} must be a non-empty identifier", key="law", value=name)
-    if name in _LAWS:
-        held = _LAWS[name].factory
-        raise ContactParameterError(
-            f"friction law {name!r} is already registered by {getattr(held, '__module__', '?')}.{getattr(held, '__qualname__', held)!s}; "
-            f"choose another name (registered: {', '.join(_LAWS)})",
-            key="law", value=name,
-        )  # fmt: skip
+    require_unregistered("friction law", name, _LAWS[name].factory if name in _LAWS else None, factory, _LAWS, key="law")
     if not callable(factory):
         raise ContactParameterError(f"friction law {name!r}: factory={factory!r} must be callable", key="law", value=name)
     keys = _factory_keys(name, factory) if keys is None else tuple(keys)

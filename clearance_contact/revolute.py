@@ -447,9 +447,9 @@ def _slice_state(z, mx, my, mdx, mdy, tx, ty, tdx, tdy, t_abs, bb, bbd, bbtt, bb
         sp_dot = tdx * ex + tdy * ey + tx * edx + ty * edy
         num = sp * sp + bbtt
         x = num / d
-        if d * d > 0.0:
+        if d * d >= 2.2250738585072014e-308:  # the smallest normal double: below it d * d loses digits, then underflows
             x_dot = ((2.0 * sp * sp_dot + bbtt_dot) * d - 2.0 * num * (ex * edx + ey * edy + bbd)) / (d * d)
-        else:  # d < ~1e-154 (a centred journal tilted by rounding): d * d underflows; the same quotient, divided once
+        else:  # d < ~1.5e-154 (a centred journal tilted by rounding): the same quotient, divided by d once
             x_dot = ((2.0 * sp * sp_dot + bbtt_dot) - 2.0 * x * (ex * edx + ey * edy + bbd)) / d
     else:
         x = 0.0

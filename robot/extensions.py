@@ -13,8 +13,10 @@ Names are separated by commas (spaces ignored) and must be importable from
 ``sys.path`` (an installed package, or a folder on ``PYTHONPATH``): a module
 that cannot be found, or that fails while it is imported, stops the command
 with an :class:`ExtensionError` naming it (exit 2). Each module is imported
-once per process (:func:`load_extensions` is idempotent), and workers inherit
-the variable with the rest of the environment.
+once per process (:func:`load_extensions` is idempotent). The processes a
+command starts (a sweep's local workers, the claims study's) inherit the
+variable with the rest of the environment; workers started elsewhere (``dask
+worker`` for ``--scheduler ADDRESS``) need it, and the modules, in their own.
 """
 
 from __future__ import annotations

@@ -26,6 +26,7 @@ import os
 import subprocess
 import sys
 import textwrap
+from types import SimpleNamespace
 from pathlib import Path
 
 import numpy as np
@@ -235,6 +236,8 @@ def test_taken_friction_law_names_are_refused(scratch_registries):
         with pytest.raises(ContactParameterError, match=f"friction law '{name}' is already registered"):
             cc.register_friction_law(name, PyCoulomb)
     assert F.friction_law_type("coulomb").law_class is CoulombFriction  # the built-in is still there
+    # the same definition again (a module reloaded, a notebook cell run twice) may register again
+    cc.register_friction_law(THRELFALL, ThrelfallFriction, (FrictionKey("coefficient"), FrictionKey("v0", low_open=True)))
     with pytest.raises(ContactParameterError, match="cannot take the keys"):
         cc.register_friction_law("mismatched_keys_test", PyCoulomb, (FrictionKey("mu"),))
     assert "mismatched_keys_test" not in F.friction_law_names()
@@ -361,6 +364,18 @@ def test_broken_laws_are_refused_when_the_joint_is_built(law, words):
 
 
 # --- 2. dissipation models ------------------------------------------------------------------------
+def stiff_chi(ce):
+    """A user's chi written with numpy: returns a 0-d array."""
+    return np.where(ce < 1.0, 3.0 * (1.0 - ce) / 4.0, 0.0)
+
+
+def test_a_user_model_may_return_a_numpy_scalar_and_register_again(scratch_registries):
+    cc.register_dissipation_model("lee_wang_numpy_test", stiff_chi)
+    cc.register_dissipation_model("lee_wang_numpy_test", stiff_chi)  # the same definition again: allowed
+    assert D.dissipation_factor("lee_wang_numpy_test", 0.8) == pytest.approx(0.15)
+    assert F.user_friction_gain(SimpleNamespace(force_over_speed=lambda n, v: np.float32(2.0) * np.ones(())), 1.0, 0.1) == 2.0
+
+
 def test_dissipation_model_names_cannot_be_taken_or_written(scratch_registries):
     hunt_crossley = D.DISSIPATION_MODELS["hunt_crossley"]
     with pytest.raises(ContactParameterError, match="'hunt_crossley' is already registered"):

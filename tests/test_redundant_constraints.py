@@ -28,7 +28,7 @@ import pytest
 
 from robot.dynamics import equations as D
 from robot.model import redundancy as R
-from robot.errors import RedundantConstraintWarning
+from robot.errors import RedundantConstraintWarning, SingularConfigurationError
 from robot.model import constraints as C
 from robot.model import kinematics as K
 from robot.model.description import parse_mechanism
@@ -368,6 +368,21 @@ def test_a_fast_bennett_linkage_keeps_its_dependent_rows_out_off_the_manifold(tm
     energy = result["kinetic_energy"] + result["potential_energy"]
     balance = energy - energy[0] - result["actuator_work"]
     assert np.abs(balance).max() < 1e-9 * np.abs(energy).max()  # measured 5e-12 relative (driven), 2e-15 (passive)
+
+
+def test_actuators_that_over_constrain_the_mechanism_are_refused():
+    """A four-bar with crank and rocker both driven: closure rank 2 + 2 drivers on 3 velocities. The cap of the kept
+    closure rows (never more than nv less the drivers) must not hide it by dropping an independent closure row."""
+    text = FOUR_BAR.read_text()
+    second = '<transmission name="rocker_transmission"><joint name="rocker"/><actuator name="M2"/></transmission>'
+    assert text.count("</robot>") == 1
+    mechanism = build_mechanism(parse_mechanism(text.replace("</robot>", second + "</robot>"), is_text=True))
+    q = K.assemble(C.constraint_set(mechanism, driven=False), pin.neutral(mechanism.model)).q  # a closed pose
+    data = mechanism.model.createData()
+    K.update_kinematics(mechanism.model, data, q)
+    driven = C.constraint_set(mechanism, driven=True)
+    with pytest.raises(SingularConfigurationError, match=r"2 driving constraints \(crank, rocker\) and closure equations of rank 2 on 3 velocity coordinates: the actuators over-constrain"):
+        R.detect(driven, mechanism.model, data, C.jacobian(driven, mechanism.model, data), warn=False)
 
 
 def test_a_dropped_row_comes_back_only_when_it_is_clearly_independent():

@@ -162,3 +162,13 @@ def test_an_override_that_changes_the_friction_law_starts_a_new_table():
     assert coulomb.clearances[0].law.scene_parameters["friction"]["coefficient"] == 0.2
     with pytest.raises(SceneError, match="unknown key.*dynamic.*of friction law 'none'"):
         load_scene("slider_crank_translational", {"clearance.slider.friction.law": "none", "clearance.slider.friction.dynamic": 0.2})
+
+
+def test_an_override_switching_an_actuator_s_function_gives_the_whole_new_table():
+    """Two kind keys in one table (an actuator's mode and its function): the table is emptied once, then filled with
+    every key of the call, in any order (a second kind key emptied it again once)."""
+    overrides = {"actuators.shoulder.value": 0.5, "actuators.shoulder.function": "constant", "actuators.shoulder.mode": "force"}
+    scene = load_scene("free_two_link_spring", overrides)
+    assert scene.document["actuators"]["shoulder"] == {"mode": "force", "function": "constant", "value": 0.5}
+    with pytest.raises(SceneError, match="mode"):  # the new table without its mode: refused, naming it
+        load_scene("free_two_link_spring", {"actuators.shoulder.function": "constant", "actuators.shoulder.value": 0.5})

@@ -75,6 +75,8 @@ class ForcePeaks:
         """Normal force (N) of candidate ``k`` at (t, y); ``-inf`` in a pose the contact law refuses."""
         try:
             return float(self.system.probe(t, y, onset_rates, residual=False).normal_force[k])
+        except ContactLawError:
+            raise  # a user-defined law broke its contract: the run stops on it (not a missed peak)
         except ContactError:
             return -math.inf
 

@@ -213,16 +213,7 @@ def detect(
     ranked, pivots = ranked_rows(scaled[:n_closure], tolerance)
     kept = np.sort(ranked[: closure_rank(pivots, tolerance, model.nv, driving.size, previous)])
     if driving.size:
-        stacked = np.vstack([scaled[kept], scaled[driving]])
-        singular_values = np.linalg.svd(stacked, compute_uv=False)
-        if singular_values[-1] <= tolerance * singular_values[0]:
-            dependent = [constraints.mechanism.actuated_joints[k] for k in _dependent_drivers(scaled[kept], scaled[driving], tolerance)]
-            raise SingularConfigurationError(
-                f"mechanism {constraints.mechanism.name!r}: the driving constraints of {', '.join(dependent)} depend on the "
-                "closures at this configuration (smallest relative singular value "
-                f"{singular_values[-1] / singular_values[0]:.1e} <= {tolerance:.0e}): the actuators are at a singular "
-                "configuration or drive the same freedom, so their forces are not unique; change the trajectory or the actuation"
-            )
+        _check_drivers(constraints, scaled[kept], scaled[driving], pivots, model.nv, tolerance)
     redundant = np.setdiff1d(np.arange(n_closure), kept)
     labels = tuple(constraints.row_labels[i] for i in redundant)
     selection = RowSelection(np.concatenate([kept, driving]).astype(int), redundant, int(kept.size), scales, labels)
@@ -236,6 +227,36 @@ def detect(
             stacklevel=3,
         )
     return selection
+
+
+def _check_drivers(constraints: C.ConstraintSet, closures: np.ndarray, drivers: np.ndarray, pivots: np.ndarray, nv: int, tolerance: float) -> None:
+    """SingularConfigurationError unless the driving rows are independent of the kept closure rows.
+
+    Two ways to fail: more closure rows clearly independent (relative pivot beyond
+    :data:`RANK_GROWTH_TOLERANCE`) than ``nv`` less the drivers leaves room for, i.e. the
+    actuators over-constrain the mechanism (the cap of :func:`closure_rank` must not hide
+    that); or the stacked rows losing rank (an actuator at a singular configuration, two
+    driving the same freedom). Either way the driving forces are not unique.
+    """
+    names = constraints.mechanism.actuated_joints
+    room = nv - drivers.shape[0]
+    if room < 0 or (pivots.size > room and pivots[room] > RANK_GROWTH_TOLERANCE):
+        rank = int(np.sum(pivots > RANK_GROWTH_TOLERANCE))
+        raise SingularConfigurationError(
+            f"mechanism {constraints.mechanism.name!r}: {drivers.shape[0]} driving constraints ({', '.join(names)}) and "
+            f"closure equations of rank {rank} on {nv} velocity coordinates: the actuators over-constrain the mechanism "
+            "(their forces are not unique); drive fewer joints, or make some actuators force-driven"
+        )
+    stacked = np.vstack([closures, drivers])
+    singular_values = np.linalg.svd(stacked, compute_uv=False)
+    if singular_values[-1] <= tolerance * singular_values[0]:
+        dependent = [names[k] for k in _dependent_drivers(closures, drivers, tolerance)]
+        raise SingularConfigurationError(
+            f"mechanism {constraints.mechanism.name!r}: the driving constraints of {', '.join(dependent)} depend on the "
+            "closures at this configuration (smallest relative singular value "
+            f"{singular_values[-1] / singular_values[0]:.1e} <= {tolerance:.0e}): the actuators are at a singular "
+            "configuration or drive the same freedom, so their forces are not unique; change the trajectory or the actuation"
+        )
 
 
 def _dependent_drivers(closures: np.ndarray, drivers: np.ndarray, tolerance: float) -> list[int]:

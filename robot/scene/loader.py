@@ -133,8 +133,6 @@ POSE_COORDINATES = ("x", "z", "roll", "pitch", "yaw")
 _TOP_KEYS = {"name", "description", "mechanism", "end_effector", "duration", "gravity", "trajectory", "solver", "baumgarte", "limits", "materials", "clearance", "initial", "output", "extends", "force", "actuators"}
 _OUTPUT_KEYS = {"step", "keep", "precision"}
 PRECISIONS = ("float64", "float32")
-#: keys that choose which other keys a table has (a time function's, an actuator's mode): with ``extends``,
-#: a child table setting one of them to another value replaces the parent's table instead of merging into it
 #: prefix of a shipped mechanism file in a scene's ``mechanism`` key
 PACKAGE_PREFIX = "package://"
 #: the largest initial misalignment looked at (degrees); the admissible one is set by the clearances

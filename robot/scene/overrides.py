@@ -91,17 +91,20 @@ def apply_overrides(document: Mapping[str, Any], overrides: Mapping[str, Any]) -
     """Return a deep copy of ``document`` with each ``path -> value`` of ``overrides`` set.
 
     A path ending in a :data:`KIND_KEYS` key that changes the table's kind (``friction.law = "none"`` over a
-    Brown-McPhee table) replaces the table by ``{key: value}``; such paths are applied first, so the other keys
-    given with them (``friction.coefficient``) fill the new table, in any order.
+    Brown-McPhee table) empties the table first, as ``extends`` replaces such a table whole: the new table is
+    the keys given in this call (``friction.coefficient`` with ``friction.law = "coulomb"``; an actuator's
+    ``mode`` with its new ``function``), in any order. A table is emptied at most once per call.
     """
     result = copy.deepcopy(dict(document))
     for path in overrides:
         if not isinstance(path, str) or not path or any(not part for part in path.split(".")):
             raise SceneError(f"override key path {path!r} must be dotted names such as 'solver.rtol'", key=str(path), value=overrides[path])
+    emptied: set[int] = set()
     for path, value in sorted(overrides.items(), key=lambda item: item[0].split(".")[-1] not in KIND_KEYS):
         parts = path.split(".")
         table = _container(result, parts, path)
-        if parts[-1] in KIND_KEYS and table.get(parts[-1]) != value:
+        if parts[-1] in KIND_KEYS and table.get(parts[-1]) != value and id(table) not in emptied:
             table.clear()  # another kind: the old kind's keys do not carry over
+            emptied.add(id(table))
         table[parts[-1]] = copy.deepcopy(value)
     return result
