@@ -53,7 +53,7 @@ and the selection is detected again (~0.1 ms) and the system solved again. Off
 the manifold (below) the check also fails on drift; the new detection then
 often keeps other, better conditioned rows for the state (a check at 1e-3
 instead, tried, let the driven Bennett linkage below keep one selection longer:
-100 times fewer detections, but a closure residual of 2.4e-7 m instead of
+30 times fewer detections, but a closure residual of 2.4e-7 m instead of
 1.4e-12 m at rtol 1e-9).
 
 **Off the manifold.** Between the accepted states an integrator evaluates trial
