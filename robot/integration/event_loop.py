@@ -271,14 +271,14 @@ class EventDrivenIntegrator:
             raise _Failure(getattr(solver, "failure_cause", None) or "step size collapse", f"t={solver.t:.9g} s: {message}")
         t_new, y_new = solver.t, solver.y
         self.accepted_here += 1
-        self.counts["steps"] += 1
+        steps = self.counts["steps"] = self.counts["steps"] + 1
         if not self.traits.fixed_step and t_new < self.t_final:
             h = solver.step_size
             if h is not None and h < self.limits.min_step:
                 raise _Failure("step size collapse", f"t={t_new:.9g} s: step size {h:.3e} s below {self.limits.min_step:.1e} s")
         if not all_finite(y_new):
             raise _Failure("non-finite state", f"t={t_new:.9g} s: the state is not finite")
-        if self.counts["steps"] % STALL_WINDOW == 0:
+        if steps % STALL_WINDOW == 0:
             self.check_pace(t_new)
         return _Step(solver.t_old, t_new, y_new, self.probe(t_new, y_new))
 

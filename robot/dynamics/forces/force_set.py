@@ -21,6 +21,7 @@ import pinocchio as pin
 
 from robot.dynamics.forces.base import ForceElement, NonFiniteForceError
 from robot.dynamics.forces.kinematics import PointKinematics
+from robot.dynamics.forces.registry import class_name
 
 
 @dataclass(frozen=True, eq=False)
@@ -82,9 +83,8 @@ class BoundForces:
             scalar = element.apply(self.kinematics, t, q, v, alone)
             problem = _non_finite_output(alone, scalar)
             if problem is not None:
-                cls = type(element)
                 raise NonFiniteForceError(
-                    f"force element {element.name!r} (type {cls.type_name!r}, class {cls.__module__}.{cls.__qualname__}) {problem} "
+                    f"force element {element.name!r} (type {type(element).type_name!r}, class {class_name(type(element))}) {problem} "
                     f"at t={t:.9g} s from a finite state: fix its apply (where its law is undefined, raise "
                     "robot.dynamics.forces.ForceElementError saying why)",
                     key=element.name,

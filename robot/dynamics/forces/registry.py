@@ -48,7 +48,7 @@ def register(type_name: str) -> Callable[[E], E]:
     def decorate(cls: E) -> E:
         if type_name in FORCE_TYPES:
             raise RegistrationError(
-                f"force element type {type_name!r} is registered twice ({FORCE_TYPES[type_name].__name__}, {_class_name(cls)}): "
+                f"force element type {type_name!r} is registered twice ({FORCE_TYPES[type_name].__name__}, {class_name(cls)}): "
                 "choose another type name",
                 key="type",
                 value=type_name,
@@ -77,7 +77,7 @@ def check_contract(cls: type, type_name: str) -> None:
             problems.append(f"{flag}={getattr(cls, flag, None)!r} must be True or False")
     if problems:
         raise RegistrationError(
-            f"force element type {type_name!r} ({_class_name(cls)}) does not meet the ForceElement contract: {'; '.join(problems)} "
+            f"force element type {type_name!r} ({class_name(cls)}) does not meet the ForceElement contract: {'; '.join(problems)} "
             "(docs/dynamics.md, 'Adding a force element')",
             key="type",
             value=type_name,
@@ -131,12 +131,13 @@ def _parse_failure(cls: type, where: str, exc: Exception) -> SceneError:
     """The SceneError for a user's ``parse`` that raised ``exc`` (a KeyError: the key is missing)."""
     if isinstance(exc, KeyError) and exc.args:
         key = exc.args[0]
-        return SceneError(f"{where}: key {key!r} is missing ({_class_name(cls)}.parse needs it): add {key} = ... to the [[force]] table", key=str(key))
+        return SceneError(f"{where}: key {key!r} is missing ({class_name(cls)}.parse needs it): add {key} = ... to the [[force]] table", key=str(key))
     return SceneError(
-        f"{where}: {_class_name(cls)}.parse could not read the table ({type(exc).__name__}: {exc}): check the values of its keys "
+        f"{where}: {class_name(cls)}.parse could not read the table ({type(exc).__name__}: {exc}): check the values of its keys "
         f"({', '.join(sorted(getattr(cls, 'KEYS', ())))})"
     )
 
 
-def _class_name(cls: object) -> str:
+def class_name(cls: object) -> str:
+    """``module.qualname`` of a class (what messages name an element's class by)."""
     return f"{getattr(cls, '__module__', '?')}.{getattr(cls, '__qualname__', repr(cls))}"
