@@ -77,7 +77,8 @@ def real_number(value: object) -> float | None:
 
 def _origin(definition: object) -> str:
     """Where a function or class is defined: ``module.qualname`` (the same for a reloaded module's definition)."""
-    return f"{getattr(definition, '__module__', None) or '?'}.{getattr(definition, '__qualname__', None) or definition!r}"
+    name = getattr(definition, "__qualname__", None) or repr(definition)
+    return f"{getattr(definition, '__module__', None) or '?'}.{name}"
 
 
 def require_unregistered(what: str, name: str, held: object | None, new: object, registered, key: str) -> None:

@@ -18,7 +18,7 @@ from __future__ import annotations
 
 import importlib
 
-from .errors import ContactParameterError
+from .errors import ContactParameterError, require_unregistered
 from .joint import ClearanceJoint
 
 __all__ = ["register_joint_type", "joint_type", "joint_types", "COMMON_SCENE_KEYS"]
@@ -77,13 +77,7 @@ def register_joint_type(cls: type[ClearanceJoint]) -> type[ClearanceJoint]:
         )
     if cls.__module__ not in BUILTIN_MODULES:
         _load_builtins()
-    held = _TYPES.get(name)
-    if held is not None and (held.__module__, held.__qualname__) != (cls.__module__, cls.__qualname__):
-        raise ContactParameterError(
-            f"joint type {name!r} is already registered by {held.__module__}.{held.__qualname__}: "
-            f"give {cls.__module__}.{cls.__qualname__} another type_name (registered: {', '.join(sorted(_TYPES))})",
-            key="type_name", value=name,
-        )  # fmt: skip
+    require_unregistered("joint type", name, _TYPES.get(name), cls, sorted(_TYPES), key="type_name")
     _TYPES[name] = cls
     return cls
 

@@ -18,6 +18,7 @@ import pytest
 
 from clearance_contact import joint_type, joint_types
 from clearance_contact.dissipation import DISSIPATION_MODELS
+from clearance_contact.friction import friction_law_type
 from clearance_contact.radial_laws import RADIAL_LAWS
 from clearance_contact.registry import COMMON_SCENE_KEYS
 from robot.dynamics.forces import FORCE_TYPES
@@ -55,7 +56,8 @@ def _accepted_keys() -> dict[str, set[str]]:
         "[initial]": L._INITIAL_KEYS,
         "[output]": L._OUTPUT_KEYS,
         "[actuators]": {"mode"},
-        "friction": L._FRICTION_KEYS,
+        # the shipped friction laws' keys (a registered law's own keys are its FrictionKey s)
+        "friction": {"law"}.union(*({key.name for key in friction_law_type(name).keys} for name in ("none", "brown_mcphee", "coulomb"))),
         "[[clearance]]": set(COMMON_SCENE_KEYS),
         "[[force]]": {"name", "type"},
         "override arrays": set(ARRAY_ENTRY_KEYS.values()),

@@ -111,7 +111,7 @@ from typing import Any, Mapping
 import numpy as np
 
 from clearance_contact import ContactError, Material, joint_type, joint_types
-from clearance_contact.friction import friction_law_from_scene, friction_law_type
+from clearance_contact.friction import friction_law_from_scene
 from clearance_contact.registry import COMMON_SCENE_KEYS
 
 from robot.data import shipped_urdf
@@ -143,10 +143,6 @@ _SOLVER_KEYS = {"method", "rtol", "atol", "max_step", "first_step", "jacobian"}
 _BAUMGARTE_KEYS = {"alpha", "beta"}
 _LIMIT_KEYS = {"penetration_ratio", "max_residual", "min_step", "max_wall_time", "max_steps"}
 _MATERIAL_KEYS = {"youngs_modulus", "poisson_ratio"}
-#: the shipped friction laws (clearance_contact.friction's registry holds them and any law a user registers)
-BUILTIN_FRICTION_LAWS = ("none", "brown_mcphee", "coulomb")
-#: the keys of the shipped friction laws' tables (a registered law's own keys are its FrictionKey s)
-_FRICTION_KEYS = {"law"}.union(*({key.name for key in friction_law_type(name).keys} for name in BUILTIN_FRICTION_LAWS))
 _COORDINATE_KEYS = {"offset", "rate", "amplitudes", "harmonics", "phases"}
 _TRAJECTORY_KEYS = {"type", "period", "preset"}  # besides the coordinates' tables
 _INITIAL_KEYS = {"misalignment_deg", "positions", "velocities", "clearance_state"}

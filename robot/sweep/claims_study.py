@@ -36,13 +36,13 @@ from pathlib import Path
 from typing import Any, Callable, Sequence
 
 from robot.analysis.claims import ALIGNED, IDEAL, MISALIGNED, claims_json, evaluate_claims
+from robot.analysis.studies.common import INTERRUPTED
 from robot.errors import RobotError
 from robot.io.atomic import atomic_write_text
 from robot.sweep.errors import SweepError
 
 CLEARANCE_SCENES = (ALIGNED, MISALIGNED)
-#: the cause of a run stopped by Ctrl-C (robot.integration.event_loop)
-INTERRUPTED = "interrupted"
+#: robot.cli.common's exit codes (robot/sweep does not import robot/cli)
 EXIT_OK, EXIT_INTERRUPTED_WITH_RUNS, EXIT_BAD_INPUT, EXIT_INTERRUPTED = 0, 1, 2, 130
 
 

@@ -41,7 +41,7 @@ from robot.sweep.errors import SweepError
 from robot.sweep.spec import SweepSpec
 from robot.sweep.design import python_value
 from robot.sweep.store import (
-    COUNTS, PACKED, RUN_ARRAYS, TIMING, Layout, Variable, check_store, create_store, existing_attrs, open_store, read_array, remove_store, run_ndim, write_run,
+    COUNTS, PACKED, RUN_ARRAYS, TIMING, Layout, Variable, check_store, create_store, existing_attrs, finished_runs, open_store, read_array, remove_store, run_ndim, write_run,
 )  # fmt: skip
 from robot.sweep.task import RunTask, blank_record, execute, probe, resolve_parameters
 
@@ -232,11 +232,8 @@ def dask_client(scheduler: str | None, workers: int | None) -> Iterator[Any]:
 
 
 def _todo(spec: SweepSpec, path: Path, retry_failed: bool) -> list[int]:
-    group, ndim = open_store(path), len(spec.design.dims)
-    done = read_array(path, group, "done", ndim).ravel()
-    keys = np.asarray(read_array(path, group, "run_key", ndim), dtype=object).ravel()
-    status = read_array(path, group, "status", ndim).ravel()
-    valid = done & (keys == np.array(spec.run_keys, dtype=object))
+    done, keys, status = finished_runs(path)
+    valid = done & (keys.astype(object) == np.array(spec.run_keys, dtype=object))
     if retry_failed:
         valid &= status == 0
     return [i for i in range(spec.design.size) if not valid[i]]
@@ -408,13 +405,6 @@ def _holds(spec: SweepSpec, path: Path) -> bool:
     return attrs is not None and not store_differences(spec, attrs)
 
 
-def finished_count(spec: SweepSpec, path: Path) -> int:
-    """Runs of ``spec`` the store at ``path`` holds (done with their current key, failed ones included)."""
-    if not _holds(spec, path):
-        return 0
-    return spec.design.size - len(_todo(spec, path, retry_failed=False))
-
-
 def run_sweep(
     spec: SweepSpec,
     out: str | Path,
@@ -459,8 +449,9 @@ def run_sweep(
             # a terminal's Ctrl-C reaches the local workers too: one starting then fails; the stop is what happened
         outcome.ran = len(outcome.summaries)
         outcome.interrupted = outcome.ran < len(todo)
-    if outcome.interrupted:
-        outcome.finished = finished_count(spec, path)
-    outcome.causes = store_causes(path) if _holds(spec, path) else {}
+    holds = _holds(spec, path)  # an interrupted --overwrite may have kept the old store
+    if outcome.interrupted:  # runs of spec the store holds (done with their current key, failed ones included)
+        outcome.finished = spec.design.size - len(_todo(spec, path, retry_failed=False)) if holds else 0
+    outcome.causes = store_causes(path) if holds else {}
     outcome.wall_time = time.perf_counter() - started
     return outcome

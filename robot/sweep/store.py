@@ -128,11 +128,6 @@ def open_store(path: str | Path, mode: str = "r"):
         raise damaged(path, "its root metadata (zarr.json) cannot be read", exc) from None
 
 
-def existing_layout_key(path: str | Path) -> str | None:
-    """The layout key of the sweep stored at ``path`` (None if there is no store)."""
-    return None if (attrs := existing_attrs(path)) is None else attrs.get("layout_key")
-
-
 def existing_attrs(path: str | Path) -> dict[str, Any] | None:
     """The attributes of the store at ``path`` (None if there is none; SweepError if it cannot be read)."""
     if not (Path(path) / "zarr.json").is_file():
@@ -175,11 +170,11 @@ def shown_runs(runs: list[tuple[int, ...]], limit: int = 10) -> str:
     return text + (f" and {len(runs) - limit} more" if len(runs) > limit else "")
 
 
-def finished_runs(path: str | Path) -> tuple[np.ndarray, np.ndarray]:
-    """``done`` and ``run_key`` of every run (flat, C order)."""
+def finished_runs(path: str | Path) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """``done``, ``run_key`` and ``status`` of every run (flat, C order)."""
     group = open_store(path)
     ndim = run_ndim(path, group)
-    return read_array(path, group, "done", ndim).ravel(), np.asarray(read_array(path, group, "run_key", ndim), dtype=object).ravel()
+    return tuple(np.asarray(read_array(path, group, name, ndim)).ravel() for name in ("done", "run_key", "status"))
 
 
 def run_ndim(path: str | Path, group) -> int:
