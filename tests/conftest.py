@@ -183,3 +183,12 @@ def kernel_library_dir() -> Path:
     status = ensure_library(announce=messages.append, wanted=True, retry_failed=True)
     assert status in ("fresh", "built") and is_fresh(), f"{status}: {messages}"
     return library_folder()
+
+
+def free_port() -> int:
+    """A TCP port of localhost nothing listens on (at the time of the call)."""
+    import socket
+
+    with socket.socket() as sock:
+        sock.bind(("127.0.0.1", 0))
+        return sock.getsockname()[1]

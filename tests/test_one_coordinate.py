@@ -63,6 +63,7 @@ def test_pinocchio_arrays_keep_their_shape_at_one_coordinate():
     assert frame_jacobian(model, data, frame).shape == (6, 1)
     np.testing.assert_array_equal(frame_jacobian(model, data, frame)[:, 0], [0, 0, 1, 0, 0, 0])  # a vertical slide
     assert joint_jacobian(model, data, 1).shape == (6, 1)
+    np.testing.assert_array_equal(joint_jacobian(model, data, 1)[:, 0], [0, 0, 1, 0, 0, 0])
     assert tangent_map_product(model, q, v).shape == (1,) and tangent_map_product(model, q, v)[0] == -1.5
 
 

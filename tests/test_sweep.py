@@ -12,7 +12,6 @@ from __future__ import annotations
 import dataclasses
 import os
 import signal
-import socket
 import subprocess
 import sys
 import time
@@ -30,6 +29,7 @@ from robot.analysis import ANALYSES  # noqa: E402
 from robot.run import build_run, run_scene  # noqa: E402
 from robot.sweep import load_sweep, open_sweep, run_sweep  # noqa: E402
 from robot.sweep.cli import main  # noqa: E402
+from tests.conftest import free_port  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
 DASK = Path(sys.executable).with_name("dask")
@@ -59,18 +59,12 @@ samples = {KEEP_SAMPLES}
 """
 
 
-def _free_port() -> int:
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        return s.getsockname()[1]
-
-
 @pytest.fixture(scope="module")
 def scheduler():
     """``dask scheduler`` and two ``dask worker`` processes on localhost (stopped at the end)."""
     from distributed import Client
 
-    port = _free_port()
+    port = free_port()
     address = f"tcp://127.0.0.1:{port}"
     env = {**os.environ, "PYTHONPATH": str(ROOT)}
     common = ["--no-dashboard"]
