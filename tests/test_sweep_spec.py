@@ -43,6 +43,9 @@ def _file(tmp_path: Path, key="clearance.S1.clearance", axis="values = [5e-5, 1e
         ({"key": "clearance.S1.restitution", "axis": "values = [0.5, 1.5]"}, "clearance.S1.restitution", "1.5"),  # refused by the scene
         ({"key": "clearance.S1.clearance", "axis": "values = [1e-4, -2e-5]"}, "clearance.S1.clearance", "-2e-05"),
         ({"key": "trajectory.period", "axis": "log = { start = 0.0, stop = 2.0, num = 3 }"}, "trajectory.period", "0.0"),
+        ({"axis": "values = [5e-5, 1e-4, 5e-5]"}, "clearance.S1.clearance", "5e-05"),  # a repeated value
+        ({"key": "clearance.S1.dissipation", "axis": 'values = ["flores", "hunt_crossley", "flores"]'}, "clearance.S1.dissipation", "flores"),
+        ({"axis": "linear = { start = 1e-4, stop = 1e-4, num = 3 }"}, "clearance.S1.clearance", "0.0001"),
     ],
 )
 def test_bad_sweep_file_exits_2_naming_key_and_value_before_any_run(tmp_path, capsys, arguments, key, value):

@@ -179,7 +179,7 @@ def _grid_values(table: dict, key: str, where: str) -> tuple:
         values = table["values"]
         if not isinstance(values, list) or not values:
             raise SweepError(f"{where}: axis {key!r}: values={values!r} must be a non-empty list", key=key, value=values)
-        return tuple(values)
+        return _distinct(tuple(values), kind, key, where)
     spec = table[kind]
     if not isinstance(spec, dict) or set(spec) != _RANGE:
         raise SweepError(f"{where}: axis {key!r}: {kind}={spec!r} must be a table {{start, stop, num}}", key=key, value=spec)
@@ -192,7 +192,20 @@ def _grid_values(table: dict, key: str, where: str) -> tuple:
             rule = "a finite number > 0 (log range)" if kind == "log" else "a finite number"
             raise SweepError(f"{where}: axis {key!r}: {kind}.{name}={value!r} must be {rule}", key=key, value=value)
     values = np.geomspace(start, stop, num) if kind == "log" else np.linspace(start, stop, num)
-    return tuple(float(v) for v in values)
+    return _distinct(tuple(float(v) for v in values), kind, key, where)
+
+
+def _distinct(values: tuple, kind: str, key: str, where: str) -> tuple:
+    """The grid axis's values, refused if one repeats: runs are deterministic, so a repeated value
+    runs the same point twice, and the store's coordinate could not select it (``Dataset.sel``)."""
+    for index, value in enumerate(values):
+        if value in values[:index]:
+            raise SweepError(
+                f"{where}: axis {key!r}: the value {value!r} appears twice in {kind}; the values of a grid axis must be distinct",
+                key=key,
+                value=value,
+            )
+    return values
 
 
 def _sample_range(table: dict, key: str, where: str) -> tuple[float, float, str]:
