@@ -8,7 +8,12 @@ save the run it stopped as if it were finished.
 
 from __future__ import annotations
 
+import os
 from pathlib import Path
+import signal
+import subprocess
+import sys
+import time
 from types import SimpleNamespace
 
 import numpy as np
@@ -146,6 +151,30 @@ def test_a_stop_after_a_finished_run_keeps_it_and_drops_the_run_in_flight(tmp_pa
     from robot.cli.sweep import interrupted_exit
 
     assert interrupted_exit(outcome, ["SIGINT"]) == EXIT_RUN_FAILED
+
+
+def test_ctrl_c_to_the_process_group_prints_the_sweep_message_and_no_worker_traceback(tmp_path, kernel_library_dir):
+    """A terminal's Ctrl-C reaches the local workers too (one process group): they leave it to the sweep process.
+
+    Before robot/sweep/worker_setup.py, each worker printed dask's KeyboardInterrupt traceback.
+    """
+    env = {**os.environ, "PYTHONPATH": str(ROOT), "CLEARANCE_KERNEL_DIR": str(kernel_library_dir.parent)}
+    out = tmp_path / "out"
+    command = [sys.executable, str(ROOT / "scripts" / "sweep.py"), _file(tmp_path, SHORT_THEN_LONG), "--out", str(out), "--workers", "2", "--no-figures"]
+    driver = subprocess.Popen(command, env=env, start_new_session=True, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+    try:
+        deadline = time.monotonic() + 120
+        while _done(out / "sweep.zarr") < 1 and driver.poll() is None and time.monotonic() < deadline:
+            time.sleep(0.02)
+        os.killpg(driver.pid, signal.SIGINT)  # what the terminal does
+        _, err = driver.communicate(timeout=60)
+    finally:
+        if driver.poll() is None:
+            os.killpg(driver.pid, signal.SIGKILL)
+            driver.wait()
+    assert driver.returncode == EXIT_RUN_FAILED, err
+    assert "Traceback" not in err and "KeyboardInterrupt" not in err, err
+    assert "SIGINT: the sweep stopped with 1 of 2 runs finished" in err and "same command again to resume" in err, err
 
 
 def _outcome(finished: int, failed: int = 0):

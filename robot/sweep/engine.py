@@ -47,6 +47,8 @@ from robot.sweep.task import RunTask, blank_record, execute, probe, resolve_para
 
 #: environment of every local worker: one thread for every numeric library (processes give the parallelism)
 SINGLE_THREADED = {"OMP_NUM_THREADS": "1", "OPENBLAS_NUM_THREADS": "1", "MKL_NUM_THREADS": "1", "NUMBA_NUM_THREADS": "1"}
+#: module every local worker preloads: it leaves Ctrl-C to the sweep process (no worker tracebacks)
+WORKER_SETUP = "robot.sweep.worker_setup"
 #: how long the driver tries to reach a running scheduler (``scheduler=ADDRESS``) before it gives up
 CONNECT_TIMEOUT_S = 10.0
 #: how often the driver looks for a stop request while it waits for runs (s; a run's end is seen this late at most)
@@ -225,7 +227,8 @@ def dask_client(scheduler: str | None, workers: int | None) -> Iterator[Any]:
         return
     n = workers or os.cpu_count() or 1
     environ = {**dask.config.get("distributed.nanny.pre-spawn-environ", {}), **SINGLE_THREADED}
-    with dask.config.set({"distributed.nanny.pre-spawn-environ": environ, "distributed.worker.daemon": False}):
+    preload = [*dask.config.get("distributed.worker.preload", []), WORKER_SETUP]
+    with dask.config.set({"distributed.nanny.pre-spawn-environ": environ, "distributed.worker.daemon": False, "distributed.worker.preload": preload}):
         with LocalCluster(n_workers=n, threads_per_worker=1, processes=True, dashboard_address=None, silence_logs=logging.ERROR) as cluster:
             with Client(cluster) as client:
                 yield client
