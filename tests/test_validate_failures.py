@@ -107,18 +107,34 @@ def test_a_signal_stops_the_study_saves_what_ran_and_exits_1(capsys, tmp_path, m
 
 
 def test_a_signal_before_any_run_exits_130_and_writes_nothing(capsys, tmp_path, monkeypatch):
+    with_solver = study.with_solver
+
+    def signalling_setup(*args, **kwargs):  # the study's own setup of its first run (the scene checks are done)
+        run = with_solver(*args, **kwargs)
+        os.kill(os.getpid(), signal.SIGINT)
+        return run
+
+    monkeypatch.setattr(study, "with_solver", signalling_setup)
+    code, _, err = run_cli(capsys, *IDEAL, "--out", tmp_path)
+    assert code == EXIT_INTERRUPTED
+    assert "nothing to save" in err
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_a_signal_while_the_scenes_are_checked_exits_130_and_creates_nothing(capsys, tmp_path, monkeypatch):
     build_run = study.build_run
 
-    def signalling_build(*args, **kwargs):
+    def signalling_build(*args, **kwargs):  # first called by the checks, before any run
         built = build_run(*args, **kwargs)
         os.kill(os.getpid(), signal.SIGINT)
         return built
 
     monkeypatch.setattr(study, "build_run", signalling_build)
-    code, _, err = run_cli(capsys, *IDEAL, "--out", tmp_path)
+    out = tmp_path / "out"
+    code, _, err = run_cli(capsys, *IDEAL, "--out", out)
     assert code == EXIT_INTERRUPTED
-    assert "nothing to save" in err
-    assert list(tmp_path.iterdir()) == []
+    assert "interrupted" in err and "Traceback" not in err
+    assert not out.exists()
 
 
 def test_json_and_figures_are_written_atomically(capsys, tmp_path, monkeypatch):

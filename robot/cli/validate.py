@@ -2,9 +2,14 @@
 
 Writes OUT/validation.json (maximum deviations per quantity and scene, statistics,
 wall time of each engine, the solver settings used) and OUT/validation_<scene>.png,
-OUT/deviation_<scene>.png. The Lagrange and Newton-Euler runs use the validation's
-own pinned integrator (robot.validation.settings.VALIDATION_SOLVER), never the
-scenes' [solver] tables; --method/--rtol/--atol/--max-step/--first-step override it.
+OUT/deviation_<scene>.png. A scene runs over --duration SCENE=T, else the default
+study's horizon (ideal 1 s; spherical, compound, compound_misaligned 0.5 s), else
+its own duration. Before any run, each scene is built and checked against each
+engine: a joint, closure, actuator, force element or body an engine does not model
+is refused (exit status 2, naming the scene, the engine and the feature). The
+Lagrange and Newton-Euler runs use the validation's own pinned integrator
+(robot.validation.settings.VALIDATION_SOLVER), never the scenes' [solver] tables;
+--method/--rtol/--atol/--max-step/--first-step override it.
 
 examples:
   clearance validate                                         # every default scene, both engines
@@ -48,7 +53,7 @@ def execute(args: argparse.Namespace) -> int:
         raise UsageError("--engines exudyn: the exudyn package is not installed (pip install exudyn); or leave it out: --engines newton_euler")
     with clean_stops(f"saving the finished runs to {out}") as stops:
         stops.phase = Phase.RUNNING
-        results = run_validation(args, stop_reason=lambda: stops.received[0] if stops.received else None)
+        results = run_validation(args, stop_reason=lambda: stops.received[0] if stops.received else None, checked=True)
     if results["success"]:
         return EXIT_OK
     if not results["scenes"]:
@@ -58,9 +63,14 @@ def execute(args: argparse.Namespace) -> int:
 
 
 def _check_options(args: argparse.Namespace) -> None:
-    """``UsageError`` naming the first bad scene, ``--duration``, solver option or ``--exudyn-step`` (nothing run yet)."""
+    """``UsageError`` naming the first bad scene, ``--duration``, solver option or ``--exudyn-step``; then the engines' scope.
+
+    Last, :func:`robot.validation.study.check_scenes` builds every scene and
+    raises ``UnsupportedFeatureError`` (exit 2) for a scene an engine does not
+    model. Nothing is run or written yet.
+    """
     from robot.scene.loader import load_scene
-    from robot.validation.study import solver_from_options
+    from robot.validation.study import check_scenes, solver_from_options
 
     for scene in args.scenes:
         load_scene(scene)
@@ -79,3 +89,4 @@ def _check_options(args: argparse.Namespace) -> None:
     step = args.exudyn_step
     if step is not None and not (math.isfinite(step) and step > 0):
         raise UsageError(f"--exudyn-step={step!r} must be a finite number > 0")
+    check_scenes(args)

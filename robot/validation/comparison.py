@@ -1,8 +1,9 @@
 """Deviations and statistics between the engines' histories.
 
 Every engine's run is reduced to an :class:`EngineSeries` (time, driving forces,
-end-effector position, contact normal force per clearance joint, contact onset
-times, wall time). Two kinds of comparison:
+end-effector position, the positions of every body's link-frame origin, contact
+normal force per clearance joint, contact onset times, wall time). Two kinds of
+comparison:
 
 * **pointwise**, where the runs must agree to integration accuracy: over the
   whole run for the ideal mechanism, and before the first contact onset for
@@ -12,12 +13,19 @@ times, wall time). Two kinds of comparison:
   (no interpolation); Exudyn's fixed steps are compared with the Lagrange
   histories interpolated by cubic splines on the smooth pre-impact part.
   Relative driving-force deviations are divided by the largest driving force
-  of the Lagrange run in the same window.
+  of the Lagrange run in the same window. Compared: the driving forces, the
+  end-effector position and the **body positions** (the largest distance
+  between the two engines' positions of any body's link-frame origin,
+  ``body_position_max_m``): the driving forces and the end effector alone miss
+  a wrong motion of the other bodies, e.g. in a mechanism without actuators
+  whose end effector does not move.
 * **statistics**, which survive the separation: peak, time-averaged mean and
   RMS of the contact normal force of each clearance joint (sum over its
   candidates), time-averaged driving forces, RMS of the end-effector deviation
-  from the ideal (prescribed) motion, number of impacts, and the first impact
-  (onset time and peak force within ``FIRST_IMPACT_WINDOW`` after it).
+  from the ideal (prescribed) motion (only with a platform-pose drive, which
+  prescribes the end effector's motion; ``None`` otherwise), number of
+  impacts, and the first impact (onset time and peak force within
+  ``FIRST_IMPACT_WINDOW`` after it).
   Time averages are trapezoidal integrals over the (non-uniform) records
   divided by the duration.
 """
@@ -46,10 +54,11 @@ class EngineSeries:
     wall_time: float = float("nan")
     success: bool = True
     message: str = ""
-    ee_ideal: np.ndarray | None = None  # (n, 3) prescribed platform position at t
+    ee_ideal: np.ndarray | None = None  # (n, 3) prescribed platform position at t; None: no platform-pose drive
     integration_time: float = float("nan")  # wall time of the time integration alone
     penetration: dict = field(default_factory=dict)  # site -> (n,) deepest penetration over the candidates
     solver: dict = field(default_factory=dict)  # integrator settings the engine actually ran with
+    body_origins: np.ndarray | None = None  # (n, bodies, 3) world positions of the bodies' link-frame origins
 
     @property
     def first_onset(self) -> float:
@@ -68,6 +77,7 @@ def statistics(series: EngineSeries, duration: float) -> dict:
         "n_impacts": int(series.onsets.size),
         "first_onset_s": series.first_onset if np.isfinite(series.first_onset) else None,
     }
+    out["rms_ee_deviation_from_ideal_m"] = out["max_ee_deviation_from_ideal_m"] = None  # no prescribed end-effector motion
     if series.ee_ideal is not None:
         deviation = np.linalg.norm(series.ee_position - series.ee_ideal, axis=1)
         out["rms_ee_deviation_from_ideal_m"] = float(np.sqrt(_time_average(series.t, deviation**2, duration)))
@@ -104,7 +114,7 @@ def compare_statistics(stats: dict, reference: dict) -> dict:
     }
     if stats.get("first_onset_s") is not None and reference.get("first_onset_s") is not None:
         out["first_onset_s"] = stats["first_onset_s"] - reference["first_onset_s"]
-    if "rms_ee_deviation_from_ideal_m" in stats:
+    if stats.get("rms_ee_deviation_from_ideal_m") is not None:
         out["rms_ee_deviation_from_ideal"] = relative_difference(
             stats["rms_ee_deviation_from_ideal_m"], reference["rms_ee_deviation_from_ideal_m"], floor=1e-9
         )
@@ -124,7 +134,10 @@ def pointwise_on_reference_times(series: EngineSeries, reference: EngineSeries, 
         raise ValueError("pointwise_on_reference_times needs the series sampled at the reference's times")
     mask = _window(reference, t_end) & np.all(np.isfinite(series.driving_force), axis=1)
     scale = _scale(reference, reference.t < t_end)
-    return _deviations(series.driving_force[mask] - reference.driving_force[mask], series.ee_position[mask] - reference.ee_position[mask], scale, t_end)
+    d_bodies = _body_difference(series.body_origins, reference.body_origins, mask, lambda values: values[mask])
+    return _deviations(
+        series.driving_force[mask] - reference.driving_force[mask], series.ee_position[mask] - reference.ee_position[mask], d_bodies, scale, t_end
+    )
 
 
 def pointwise_interpolated(series: EngineSeries, reference: EngineSeries, t_end: float) -> dict:
@@ -134,7 +147,17 @@ def pointwise_interpolated(series: EngineSeries, reference: EngineSeries, t_end:
     mask = _window(series, min(t_end, t_ref[-1]))
     force = CubicSpline(t_ref, reference.driving_force[ref_mask][keep])(series.t[mask])
     ee = CubicSpline(t_ref, reference.ee_position[ref_mask][keep])(series.t[mask])
-    return _deviations(series.driving_force[mask] - force, series.ee_position[mask] - ee, _scale(reference, ref_mask), t_end)
+    d_bodies = _body_difference(
+        series.body_origins, reference.body_origins, mask, lambda values: CubicSpline(t_ref, values[ref_mask][keep])(series.t[mask])
+    )
+    return _deviations(series.driving_force[mask] - force, series.ee_position[mask] - ee, d_bodies, _scale(reference, ref_mask), t_end)
+
+
+def _body_difference(origins: np.ndarray | None, reference: np.ndarray | None, mask: np.ndarray, at_times) -> np.ndarray | None:
+    """(points, bodies, 3) body-origin differences at the compared times (``at_times``: the reference there); None if not recorded."""
+    if origins is None or reference is None or origins.shape[1:] != reference.shape[1:]:
+        return None
+    return origins[mask] - at_times(reference)
 
 
 def _scale(reference: EngineSeries, mask: np.ndarray) -> float:
@@ -144,9 +167,14 @@ def _scale(reference: EngineSeries, mask: np.ndarray) -> float:
     return float(np.max(np.abs(values))) if values.size else float("nan")
 
 
-def _deviations(d_force: np.ndarray, d_ee: np.ndarray, scale: float, t_end: float) -> dict:
+def _deviations(d_force: np.ndarray, d_ee: np.ndarray, d_bodies: np.ndarray | None, scale: float, t_end: float) -> dict:
+    """The largest deviations: driving forces (N and relative to ``scale``), end effector and body origins (m).
+
+    ``None`` where nothing is compared (no actuator, no point in the window, no body).
+    """
     d_force = np.abs(d_force)
     d_ee = np.linalg.norm(d_ee, axis=1)
+    d_bodies = np.zeros((0, 0)) if d_bodies is None else np.linalg.norm(d_bodies, axis=2)
     out = {
         "window_end_s": float(t_end) if np.isfinite(t_end) else None,
         "n_points": int(len(d_ee)),
@@ -154,15 +182,23 @@ def _deviations(d_force: np.ndarray, d_ee: np.ndarray, scale: float, t_end: floa
         "driving_force_max_rel": float(d_force.max() / scale) if d_force.size else None,
         "driving_force_scale_N": scale,
         "ee_position_max_m": float(d_ee.max()) if d_ee.size else None,
+        "body_position_max_m": float(d_bodies.max()) if d_bodies.size else None,
     }
     return out
+
+
+def _largest_per_row(values: np.ndarray) -> np.ndarray:
+    """Largest finite entry of each row; NaN for a row without one (no actuator: no driving force to compare)."""
+    if values.shape[1] == 0:
+        return np.full(values.shape[0], np.nan)
+    return np.nanmax(values, axis=1)
 
 
 def deviation_history(series: EngineSeries, reference: EngineSeries, same_times: bool) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """(t, max |dF| over actuators, |dEE|) for plotting; the reference is interpolated unless ``same_times``."""
     if same_times:
         t = reference.t
-        d_force = np.nanmax(np.abs(series.driving_force - reference.driving_force), axis=1)
+        d_force = _largest_per_row(np.abs(series.driving_force - reference.driving_force))
         d_ee = np.linalg.norm(series.ee_position - reference.ee_position, axis=1)
         return t, d_force, d_ee
     ok = np.all(np.isfinite(reference.driving_force), axis=1)
@@ -170,7 +206,7 @@ def deviation_history(series: EngineSeries, reference: EngineSeries, same_times:
     mask = (series.t > 0) & (series.t <= t_ref[-1])
     force = CubicSpline(t_ref, reference.driving_force[ok][keep])(series.t[mask])
     ee = CubicSpline(t_ref, reference.ee_position[ok][keep])(series.t[mask])
-    return series.t[mask], np.max(np.abs(series.driving_force[mask] - force), axis=1), np.linalg.norm(series.ee_position[mask] - ee, axis=1)
+    return series.t[mask], _largest_per_row(np.abs(series.driving_force[mask] - force)), np.linalg.norm(series.ee_position[mask] - ee, axis=1)
 
 
 def separation_time(series: EngineSeries, reference: EngineSeries, same_times: bool, threshold: float = 1e-6) -> float | None:

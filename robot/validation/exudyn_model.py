@@ -47,6 +47,16 @@ Model
   step that enters contact (error ``O(h a)``, ``a`` the relative acceleration
   before the impact).
 
+Scope
+-----
+The Newton-Euler model's (:data:`.newton_euler.SCOPE`: its bodies, with links
+on fixed joints merged, element frames and contact sites are used here), and
+every prescribed actuator length must stay > 0 over the run: the
+``ObjectConnectorDistance`` is an unsigned distance, so a rail coordinate at
+or through 0 cannot be prescribed (:func:`check_actuator_lengths`, called by
+:func:`check_supported` before any run and by :func:`simulate` before the model
+is built). Refusals raise :class:`.bodies.UnsupportedFeatureError`.
+
 Initial conditions
 ------------------
 Positions and velocities from the Lagrange run's ``y0``. Exudyn's own
@@ -77,7 +87,7 @@ from robot.scene.loader import misalignment_rotation
 from robot.model.mechanism import rotation_z_to
 from robot.run import Run
 from robot.validation import newton_euler as NE
-from robot.validation.bodies import read_geometry, rpy_matrix
+from robot.validation.bodies import UnsupportedFeatureError, rpy_matrix
 
 #: spacing (s) of the exact actuator lengths the drive spline goes through
 DRIVE_TABLE_SPACING = 2e-4
@@ -109,6 +119,7 @@ class ExudynResult:
     wall_time: float = 0.0  # build + initial accelerations + integration
     n_steps: int = 0
     solve_time: float = 0.0  # SolveDynamic only (includes the per-step Python logging)
+    body_origins: np.ndarray = field(default_factory=lambda: np.zeros((0, 0, 3)))  # (steps, bodies, 3) link-frame origins
 
 
 def _qmul(a: np.ndarray, b: np.ndarray) -> np.ndarray:
@@ -208,6 +219,43 @@ def actuator_lengths(drive, t_end: float, spacing: float = DRIVE_TABLE_SPACING):
     return CubicHermiteSpline(times, s, sd)
 
 
+def check_actuator_lengths(lengths, joints: list[str], t_end: float) -> None:
+    """``UnsupportedFeatureError`` if a prescribed actuator length ``lengths(t)`` is not > 0 somewhere in ``[0, t_end]``.
+
+    The model drives a prismatic joint by the distance between its two hinge
+    points (``ObjectConnectorDistance``), an unsigned length: at 0 its direction is
+    undefined (Exudyn refuses a distance of 0) and a negative prescribed
+    coordinate cannot be met. Checked on the spline Exudyn is given, at its nodes
+    and 8 points between each two (a cubic between exact positive values).
+    """
+    if not joints:
+        return
+    times = np.union1d(lengths.x[lengths.x <= t_end], np.linspace(0.0, t_end, 8 * len(lengths.x) + 1))
+    values = lengths(times).reshape(len(times), -1)
+    for k, joint in enumerate(joints):
+        bad = np.flatnonzero(~(values[:, k] > 0.0))
+        if bad.size:
+            raise UnsupportedFeatureError(
+                f"actuator {joint!r}: its prescribed length is {values[bad[0], k]:.6g} m at t = {times[bad[0]]:.6g} s; the Exudyn "
+                "model drives a prismatic joint by the distance between its hinge points, an unsigned length, which must stay > 0 "
+                "over the run (move the joint origin so that the coordinate stays positive, or leave Exudyn out: --engines newton_euler)"
+            )
+
+
+def check_supported(run: Run, t_end: float | None = None) -> None:
+    """``UnsupportedFeatureError`` naming what the Exudyn model of ``run`` cannot have (nothing is run).
+
+    Its scope is the Newton-Euler model's (:func:`.newton_euler.build_model`,
+    whose bodies, frames and contact sites it uses), and every prescribed
+    actuator length must stay positive over ``[0, t_end]`` (:func:`check_actuator_lengths`).
+    """
+    NE.check_supported(run)
+    actuated = list(run.mechanism.description.actuated_joints)
+    if actuated:
+        t_end = run.scene.duration if t_end is None else t_end
+        check_actuator_lengths(actuator_lengths(run.dynamics.drive, t_end), actuated, t_end)
+
+
 class _ContactElement:
     """State and force function of one clearance joint between two Exudyn nodes (or a node and the ground)."""
 
@@ -297,9 +345,11 @@ class _ExudynMechanism:
             self.bodies.append(obj)
 
     def marker(self, link: str, xyz, rotation=np.eye(3)):
-        k = self.geometry.body_index(link)
+        """A rigid marker at the frame (``xyz``, ``rotation``) given on ``link``, on the body carrying the link."""
+        carrier, xyz, rotation = self.geometry.place(link, xyz, rotation)
+        k = self.geometry.body_index(carrier)
         owner = self.ground if k < 0 else self.bodies[k]
-        local = self.exu.HT(rotation=np.asarray(rotation, float), translation=np.asarray(xyz, float) - self.com[link])
+        local = self.exu.HT(rotation=rotation, translation=xyz - self.com[carrier])
         return self.mbs.AddMarker(self.I.MarkerBodyRigid(bodyNumber=owner, localHT=local))
 
     def add_joints(self, clearance: set, actuated: list, s0: np.ndarray) -> None:
@@ -319,10 +369,9 @@ class _ExudynMechanism:
                     k = actuated.index(joint.name)
                     hinge0, hinge1 = self.marker(joint.parent, joint.origin_xyz), self.marker(joint.child, np.zeros(3))
                     self.drives[k] = mbs.AddObject(I.ObjectConnectorDistance(markerNumbers=[hinge0, hinge1], distance=float(s0[k])))
-            else:
-                raise NotImplementedError(f"joint {joint.name!r} of type {joint.kind!r}")
 
     def add_closures(self, clearance: set) -> None:
+        """The ideal closures: spherical joints (the only ideal kind modelled: ``NE.build_model`` refuses the others)."""
         for closure in self.run.mechanism.description.closures:
             if closure.name in clearance:
                 continue
@@ -348,14 +397,15 @@ class _Recorder:
         self.built, self.n_actuators = built, n_actuators
         self.t: list = []
         self.ee: list = []
+        self.origins: list = []  # (n_bodies, 3) link-frame origins per step
         self.force: list = []
         self.contact = {e.site.name: ([], []) for e in built.elements}
 
     def __call__(self, mbs, t: float, initial: bool = False) -> None:
         built, exu = self.built, self.built.exu
         self.t.append(t)
-        ee = mbs.GetObjectOutputBody(built.bodies[built.ne.ee_body], exu.OutputVariableType.Position, localPosition=list(built.ne.ee_offset))
-        self.ee.append(np.asarray(ee))
+        self.ee.append(self.position(built.ne.ee_body, built.ne.ee_offset))
+        self.origins.append([self.position(k, -body.com) for k, body in enumerate(built.geometry.bodies)])
         if initial:
             self.force.append(np.full(self.n_actuators, np.nan))
         else:
@@ -368,6 +418,13 @@ class _Recorder:
                 e.onset[out] = np.maximum(result.penetration_rate[out], ONSET_RATE_FLOOR)
             self.contact[e.site.name][0].append(result.normal_force.copy())
             self.contact[e.site.name][1].append(result.penetration.copy())
+
+    def position(self, body: int, offset: np.ndarray) -> np.ndarray:
+        """World position of the point at ``offset`` from a body's COM (body axes); on the ground (-1) ``offset`` itself."""
+        if body < 0:
+            return np.array(offset, dtype=float)
+        exu = self.built.exu
+        return np.asarray(self.built.mbs.GetObjectOutputBody(self.built.bodies[body], exu.OutputVariableType.Position, localPosition=list(offset)))
 
     def contact_arrays(self) -> dict:
         return {name: {"normal_force": np.array(f), "penetration": np.array(p)} for name, (f, p) in self.contact.items()}
@@ -414,9 +471,11 @@ def simulate(run: Run, settings: ExudynSettings = ExudynSettings(), t_end: float
     started = time.perf_counter()
     t_end = run.scene.duration if t_end is None else t_end
     ne = NE.build_model(run)  # geometry, element frames and laws only (no equations of motion)
-    geometry = read_geometry(run.mechanism.description)
+    geometry = ne.geometry
     drive = run.dynamics.drive
     actuated = list(run.mechanism.description.actuated_joints)
+    lengths = actuator_lengths(drive, t_end)
+    check_actuator_lengths(lengths, actuated, t_end)
     clearance = {c.joint for c in run.scene.clearances}
     built = _ExudynMechanism(exu, I, run, ne, geometry)
     built.add_bodies(NE.initial_state(ne, run))
@@ -425,7 +484,7 @@ def simulate(run: Run, settings: ExudynSettings = ExudynSettings(), t_end: float
     built.add_contacts()
     record = _Recorder(built, len(actuated))
     mbs = built.mbs
-    _install_step_functions(mbs, built, actuator_lengths(drive, t_end), record)
+    _install_step_functions(mbs, built, lengths, record)
     mbs.Assemble()
     ss = _simulation_settings(exu, settings, t_end)
     initial = consistent_accelerations(mbs, ss, kinematic_accelerations(run, geometry).ravel())
@@ -441,6 +500,6 @@ def simulate(run: Run, settings: ExudynSettings = ExudynSettings(), t_end: float
     solve_time = time.perf_counter() - solve_started
     n = len(record.t)
     return ExudynResult(
-        success, message, settings, np.array(record.t), np.array(record.ee), np.array(record.force).reshape(n, -1),
-        record.contact_arrays(), wall, n - 1, solve_time,
+        success, message, settings, np.array(record.t), np.array(record.ee), np.array(record.force).reshape(n, len(actuated)),
+        record.contact_arrays(), wall, n - 1, solve_time, np.array(record.origins).reshape(n, len(geometry.bodies), 3),
     )

@@ -42,6 +42,20 @@ element frame origin (world axes); on the body carrying the element, at
 
 The initial state is the Lagrange model's ``y0`` mapped through Pinocchio's
 forward kinematics (positions, rotations and velocities of the link frames).
+
+Scope
+-----
+Modelled (:data:`SCOPE`): revolute, continuous, prismatic and floating joints,
+fixed joints (their child merged into the parent body, :mod:`.bodies`),
+spherical closures (and any closure or joint carrying a clearance joint),
+prescribed-motion actuators on prismatic joints, gravity and the clearance
+contacts. Anything else (an actuated revolute joint, a revolute closure without
+clearance, a planar joint, a massless moving body, ``[[force]]`` elements,
+force-driven actuators) raises :class:`.bodies.UnsupportedFeatureError` when
+the model is built (:func:`build_model`, :func:`check_supported`), before any
+integration: the engine never computes another mechanism than the Lagrange
+model's. With no ideal constraint left (every joint a clearance joint) the
+bodies move freely and the constraint residual is 0.
 """
 
 from __future__ import annotations
@@ -60,7 +74,7 @@ from robot.run import Run
 from robot.integration.event_loop import ContactProbe
 from robot.integration.options import SolverOptions
 from robot.validation.absolute_constraints import BodyStates, ConstraintSet, cross
-from robot.validation.bodies import MechanismGeometry, read_geometry, rpy_matrix
+from robot.validation.bodies import MechanismGeometry, UnsupportedFeatureError, read_geometry, rpy_matrix
 from robot.validation.event_loop import EventRun, run_events
 
 GRAVITY = np.array([0.0, 0.0, -9.81])  # the default; a model uses its run's gravity (NewtonEulerModel.gravity)
@@ -177,10 +191,21 @@ class NewtonEulerModel:
         return BodyStates(np.vstack([r, zero]), np.concatenate([A, np.eye(3)[None]]), np.vstack([v, zero]), np.vstack([w, zero]))
 
 
+#: the movable joint kinds the absolute-coordinate formulations model (a fixed joint merges its child into its parent)
+MODELLED_JOINT_KINDS = ("revolute", "continuous", "prismatic", "floating")
+#: what the Newton-Euler and Exudyn models cover, for the messages of what they refuse
+SCOPE = (
+    "the Newton-Euler and Exudyn models cover revolute, continuous, prismatic, floating and fixed joints, spherical "
+    "closures (any closure with a clearance joint), prescribed-motion actuators on prismatic joints, gravity and the clearance contacts"
+)
+
+
 def _element(geometry: MechanismGeometry, link: str, xyz, rotation) -> ElementFrame:
-    body = geometry.body(link)
+    """A frame given on ``link`` as a frame on the body carrying it (offset from the body's COM)."""
+    carrier, xyz, rotation = geometry.place(link, xyz, rotation)
+    body = geometry.body(carrier)
     com = np.zeros(3) if body is None else body.com
-    return ElementFrame(geometry.body_index(link), np.asarray(xyz, float) - com, np.asarray(rotation, float))
+    return ElementFrame(geometry.body_index(carrier), xyz - com, rotation)
 
 
 def _perpendiculars(axis: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -209,29 +234,67 @@ def _contact_sites(geometry: MechanismGeometry, description, clearances) -> tupl
     return tuple(contacts)
 
 
-def build_model(run: Run) -> NewtonEulerModel:
-    """The Newton-Euler model of a built run (same URDF, clearance joints, laws, drive and gains)."""
-    scene, description = run.scene, run.mechanism.description
-    geometry = read_geometry(description)
-    clearance = {c.joint: c for c in scene.clearances}
-    bodies = geometry.bodies
-    com = {b.name: b.com for b in bodies}
-    com[geometry.ground] = np.zeros(3)
-    cs = ConstraintSet()
-    actuated = list(description.actuated_joints)
+def check_scene_loads(scene) -> None:
+    """``UnsupportedFeatureError`` for the scene's loads the models leave out: ``[[force]]`` elements, force-driven actuators.
+
+    Both would otherwise be silently missing from the Newton-Euler and Exudyn
+    mechanisms, which would then be other mechanisms than the Lagrange model's.
+    An actuator with ``mode = "none"`` is a free joint, which both model.
+    """
+    if scene.forces:
+        names = ", ".join(f"{spec.name!r} ({spec.kind})" for spec in scene.forces)
+        raise UnsupportedFeatureError(
+            f"force element(s) {names} of [[force]]: the cross-check engines model no force elements; {SCOPE}"
+        )
+    forced = [joint for joint, spec in scene.actuators.items() if spec.mode == "force"]
+    if forced:
+        raise UnsupportedFeatureError(
+            f"force-driven actuator(s) {', '.join(map(repr, forced))} ([actuators] mode = 'force'): the cross-check engines "
+            f"model prescribed-motion actuators (mode = 'motion') and free joints (mode = 'none') only; {SCOPE}"
+        )
+
+
+def _check_joints(geometry: MechanismGeometry, description, clearance: set) -> None:
+    """``UnsupportedFeatureError`` for a joint kind, an actuated joint or a closure the models do not have."""
     for joint in geometry.joints:
+        if joint.kind not in MODELLED_JOINT_KINDS:
+            raise UnsupportedFeatureError(f"joint {joint.name!r} is {joint.kind}: {SCOPE}")
+    for name in description.actuated_joints:
+        kind = geometry.joint(name).kind
+        if kind != "prismatic":
+            raise UnsupportedFeatureError(
+                f"actuated joint {name!r} is {kind}: the cross-check engines drive prismatic joints only (a prescribed length); {SCOPE}"
+            )
+    for closure in description.closures:
+        if closure.name not in clearance and closure.kind != "spherical":
+            raise UnsupportedFeatureError(f"closure {closure.name!r} is a {closure.kind} closure without clearance: {SCOPE}")
+
+
+def end_effector_link(geometry: MechanismGeometry, description, frame: str) -> str:
+    """The link whose origin is the end-effector frame ``frame`` (a link, or a joint: its child link)."""
+    if frame in geometry.placements:
+        return frame
+    joint = description.joints.get(frame)
+    if joint is None:
+        raise UnsupportedFeatureError(f"end_effector {frame!r} is neither a link nor a joint: the cross-check engines place it on a link's origin")
+    return joint.child
+
+
+def _joint_constraints(cs: ConstraintSet, geometry: MechanismGeometry, com: dict, actuated: list[str], clearance: set) -> None:
+    """The ideal tree joints as constraint equations (revolute: spherical + 2 dot-1; prismatic: 3 dot-1 + 2 dot-2 [+ drive])."""
+    for joint in geometry.joints:
+        if joint.name in clearance or joint.kind == "floating":
+            continue
         i, j = geometry.body_index(joint.parent), geometry.body_index(joint.child)
         point_i = joint.origin_xyz - com[joint.parent]  # joint origin, parent body frame
         point_j = -com[joint.child]  # child link origin, child body frame
         axis_i = joint.origin_rotation @ joint.axis  # joint axis in the parent link frame
-        if joint.name in clearance or joint.kind == "floating":
-            continue
         if joint.kind in ("revolute", "continuous"):
             cs.spherical(i, point_i, j, point_j, joint.name)
             g, h = _perpendiculars(joint.axis)  # normal to the axis, child frame
             cs.dot1(i, axis_i, j, g, f"{joint.name}:axis-1")
             cs.dot1(i, axis_i, j, h, f"{joint.name}:axis-2")
-        elif joint.kind == "prismatic":
+        else:  # prismatic (the kinds were checked by _check_joints)
             R = joint.origin_rotation
             cs.dot1(i, R[:, 0], j, np.array([0.0, 1.0, 0.0]), f"{joint.name}:lock-z")
             cs.dot1(i, R[:, 1], j, np.array([0.0, 0.0, 1.0]), f"{joint.name}:lock-x")
@@ -241,28 +304,35 @@ def build_model(run: Run) -> NewtonEulerModel:
             cs.dot2(i, h, point_i, j, point_j, f"{joint.name}:line-2")
             if joint.name in actuated:
                 cs.dot2(i, axis_i, point_i, j, point_j, f"{joint.name}:drive", driver=actuated.index(joint.name))
-        elif joint.kind == "fixed":
-            raise NotImplementedError(f"joint {joint.name!r}: fixed joints are not needed by the 4-UPS/RPS and not modelled")
-        else:
-            raise NotImplementedError(f"joint {joint.name!r} of type {joint.kind!r}")
-    missing = [name for name in actuated if geometry.joint(name).kind != "prismatic"]
-    if missing:
-        raise NotImplementedError(f"actuated joints {missing} are not prismatic")
+
+
+def build_model(run: Run) -> NewtonEulerModel:
+    """The Newton-Euler model of a built run (same URDF, clearance joints, laws, drive and gains).
+
+    ``UnsupportedFeatureError`` (before anything is integrated) for what it does
+    not model: see :data:`SCOPE` and :func:`check_scene_loads`.
+    """
+    scene, description = run.scene, run.mechanism.description
+    check_scene_loads(scene)
+    geometry = read_geometry(description)
+    clearance = {c.joint for c in scene.clearances}
+    _check_joints(geometry, description, clearance)
+    ee_carrier, ee_xyz, _ = geometry.place(end_effector_link(geometry, description, scene.end_effector))
+    bodies = geometry.bodies
+    com = {b.name: b.com for b in bodies}
+    com[geometry.ground] = np.zeros(3)
+    cs = ConstraintSet()
+    _joint_constraints(cs, geometry, com, list(description.actuated_joints), clearance)
     for closure in description.closures:
         if closure.name in clearance:
             continue
-        if closure.kind != "spherical":
-            raise NotImplementedError(f"closure {closure.name!r}: only spherical closures are modelled")
-        a, b = closure.parent, closure.child
-        cs.spherical(
-            geometry.body_index(a.link), np.array(a.xyz) - com[a.link], geometry.body_index(b.link), np.array(b.xyz) - com[b.link], closure.name
-        )
+        a, b = (geometry.place(frame.link, frame.xyz) for frame in (closure.parent, closure.child))
+        cs.spherical(geometry.body_index(a[0]), a[1] - com[a[0]], geometry.body_index(b[0]), b[1] - com[b[0]], closure.name)
     cs.freeze(len(bodies))
 
     contacts = _contact_sites(geometry, description, scene.clearances)
     mass = np.array([b.mass for b in bodies])
     inertia = np.array([b.inertia for b in bodies])
-    ee_link = scene.end_effector
     return NewtonEulerModel(
         geometry=geometry,
         mass=mass,
@@ -273,12 +343,17 @@ def build_model(run: Run) -> NewtonEulerModel:
         drive=run.dynamics.drive,
         alpha=scene.baumgarte.alpha,
         beta=scene.baumgarte.beta,
-        ee_body=geometry.body_index(ee_link),
-        ee_offset=-com[ee_link],
+        ee_body=geometry.body_index(ee_carrier),
+        ee_offset=ee_xyz - com[ee_carrier],
         n_candidates=sum(site.law.n_candidates for site in contacts),
         names=tuple(b.name for b in bodies),
         gravity=np.array(run.mechanism.model.gravity.linear),
     )
+
+
+def check_supported(run: Run) -> NewtonEulerModel:
+    """The Newton-Euler model of ``run`` if it can be built, else ``UnsupportedFeatureError`` naming what it lacks (nothing run)."""
+    return build_model(run)
 
 
 # --- initial state --------------------------------------------------------------------------
@@ -437,13 +512,25 @@ class NEResult:
         return self.run.success
 
 
+def body_origins(model: NewtonEulerModel, y: np.ndarray) -> np.ndarray:
+    """World positions (n, 3) of the bodies' link-frame origins (``r - A c'``: the COM is at ``c'`` in the link frame)."""
+    states = model.states(y)
+    com = np.array([body.com for body in model.geometry.bodies]).reshape(-1, 3)
+    return states.r[: model.n] - np.einsum("kij,kj->ki", states.A[: model.n], com)
+
+
 def outputs(model: NewtonEulerModel, t: np.ndarray, y: np.ndarray, onset: np.ndarray) -> dict:
-    """Driving forces, end-effector position, constraint residual and contact forces at given states."""
+    """Driving forces, end-effector position, body origins, constraint residual and contact forces at given states.
+
+    ``constraint_residual``: the largest ``|Phi|``, 0 when no ideal constraint is
+    left (every joint a clearance joint or floating: the bodies move freely).
+    """
     n = len(t)
     out = {
         "t": np.asarray(t),
         "driving_force": np.full((n, len(model.constraints.driving_order)), np.nan),
         "ee_position": np.full((n, 3), np.nan),
+        "body_origins": np.full((n, model.n, 3), np.nan),
         "constraint_residual": np.full(n, np.nan),
     }
     for site in model.contacts:
@@ -456,7 +543,8 @@ def outputs(model: NewtonEulerModel, t: np.ndarray, y: np.ndarray, onset: np.nda
         ev = evaluate(model, float(t[i]), model.normalise(y[i]), onset[i])
         out["driving_force"][i] = ev.driving_force
         out["ee_position"][i] = ev.ee_position
-        out["constraint_residual"][i] = np.max(np.abs(ev.residual))
+        out["body_origins"][i] = body_origins(model, y[i])
+        out["constraint_residual"][i] = np.max(np.abs(ev.residual), initial=0.0)
         for site, result in zip(model.contacts, ev.contacts):
             out[f"{site.name}_normal_force"][i] = result.normal_force
             out[f"{site.name}_penetration"][i] = result.penetration
@@ -501,6 +589,9 @@ def simulate(
 __all__ = [
     "NewtonEulerModel",
     "build_model",
+    "check_supported",
+    "check_scene_loads",
+    "body_origins",
     "initial_state",
     "evaluate",
     "simulate",

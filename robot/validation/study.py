@@ -2,10 +2,20 @@
 
 ``clearance validate [--out DIR] [--scenes ...] [--duration SCENE=T ...]
 [--method M] [--rtol R] [--atol A] [--max-step H]`` (= ``python scripts/validate.py``;
-:mod:`robot.cli.validate`) calls :func:`run_validation`. Defaults (:data:`DEFAULT_DURATIONS`): the ideal mechanism over
-one period of the reference motion (1 s), the clearance scenes over 0.5 s (the
-first impacts, the transient of the misaligned bearing and a few tens of
-impacts), which keeps the whole study to a few minutes on two cores.
+:mod:`robot.cli.validate`) calls :func:`run_validation`. Horizons (:func:`scene_durations`):
+``--duration SCENE=T`` if given; else, for the default study's scenes
+(:data:`DEFAULT_DURATIONS`), the ideal mechanism over one period of the
+reference motion (1 s) and the clearance scenes over 0.5 s (the first impacts,
+the transient of the misaligned bearing and a few tens of impacts), which keeps
+the whole study to a few minutes on two cores; any other scene runs over its
+own ``duration``.
+
+Before any run, :func:`check_scenes` builds each scene and checks that every
+requested engine models it (:func:`robot.validation.newton_euler.check_supported`,
+:func:`robot.validation.exudyn_model.check_supported`): a joint, closure,
+actuator, load or body an engine does not model is refused with
+:class:`robot.validation.bodies.UnsupportedFeatureError` naming the scene, the
+engine and the feature, so that no engine silently computes another mechanism.
 
 Settings: the Lagrange model and Newton-Euler both use the validation's pinned
 integrator :data:`robot.validation.settings.VALIDATION_SOLVER` (RK45, rtol 1e-7,
@@ -26,20 +36,23 @@ import json
 import math
 import time
 from pathlib import Path
-from typing import Callable
+from typing import Callable, Sequence
 
 import numpy as np
+import pinocchio as pin
 
 from robot.errors import SceneError
 from robot.integration.solvers import METHODS
 from robot.io.atomic import atomic_write_text
 from robot.model.platform_kinematics import platform_state
-from robot.run import build_run, run_scene
+from robot.run import Run, build_run, run_scene
 from robot.integration.simulation import SolverOptions
+from robot.scene.loader import load_scene
 from robot.scene.loader import solver_options as scene_solver_table
 from robot.validation import comparison as CMP
 from robot.validation import exudyn_model as EX
 from robot.validation import newton_euler as NE
+from robot.validation.bodies import UnsupportedFeatureError, read_geometry
 from robot.validation.settings import VALIDATION_SOLVER, check_solver, validation_solver, with_solver
 
 DEFAULT_SCENES = ("ideal", "spherical", "compound", "compound_misaligned")
@@ -62,8 +75,13 @@ def exudyn_settings_for(run) -> EX.ExudynSettings:
     return EXUDYN_SETTINGS["clearance" if run.scene.clearances else "ideal"]
 
 
+def prescribes_end_effector(run) -> bool:
+    """Whether the drive prescribes the end effector's motion: a platform-pose drive does, a joint drive (or none) does not."""
+    return run.layout is not None
+
+
 def ideal_positions(run, t: np.ndarray) -> np.ndarray:
-    """Prescribed platform-origin position at the times t (the ideal mechanism's end effector)."""
+    """Prescribed platform-origin position at the times t (the ideal mechanism's end effector; platform-pose drives only)."""
     out = np.empty((len(t), 3))
     for i, ti in enumerate(t):
         pose, _, _ = run.dynamics.drive.pose(float(ti))
@@ -73,6 +91,19 @@ def ideal_positions(run, t: np.ndarray) -> np.ndarray:
 
 def _sites(run) -> list[str]:
     return [c.joint for c in run.scene.clearances]
+
+
+def lagrange_body_origins(run, q: np.ndarray) -> np.ndarray:
+    """(records, bodies, 3) world positions of the bodies' link-frame origins (the cross-check engines' bodies, in their order)."""
+    model = run.mechanism.model
+    data = model.createData()
+    frames = [model.getFrameId(body.name, pin.FrameType.BODY) for body in read_geometry(run.mechanism.description).bodies]
+    out = np.full((len(q), len(frames), 3), np.nan)
+    for i, qi in enumerate(q):
+        if np.all(np.isfinite(qi)):
+            pin.framesForwardKinematics(model, data, qi)
+            out[i] = [data.oMf[frame].translation for frame in frames]
+    return out
 
 
 def lagrange_series(run) -> CMP.EngineSeries:
@@ -86,6 +117,7 @@ def lagrange_series(run) -> CMP.EngineSeries:
         "lagrange", result["t"], result["driving_force"], result["ee_position"], contact, np.unique(onsets), wall, result.success, result.message,
         integration_time=float(result.counts["wall_time"]), penetration=penetration,
         solver={key: result.metadata[key] for key in ("method", "rtol", "atol", "max_step")},
+        body_origins=lagrange_body_origins(run, result["q"]),
     )
 
 
@@ -102,6 +134,7 @@ def newton_euler_series(run, t_eval: np.ndarray) -> tuple[CMP.EngineSeries, CMP.
         return CMP.EngineSeries(
             "newton_euler", arrays["t"], arrays["driving_force"], arrays["ee_position"], contact, onsets, result.wall_time, result.success, result.run.message,
             integration_time=result.run.wall_time, penetration=penetration, solver=dict(result.run.settings),
+            body_origins=arrays["body_origins"],
         )
 
     return series(a), series(e)
@@ -119,7 +152,7 @@ def exudyn_series(run, settings: EX.ExudynSettings) -> CMP.EngineSeries:
     return CMP.EngineSeries(
         "exudyn", result.t, result.driving_force, result.ee_position, contact, np.unique(onsets), result.wall_time, result.success, result.message,
         integration_time=result.solve_time, penetration=penetration,
-        solver={"method": "GeneralizedAlpha (Exudyn)", **settings.__dict__},
+        solver={"method": "GeneralizedAlpha (Exudyn)", **settings.__dict__}, body_origins=result.body_origins,
     )
 
 
@@ -136,6 +169,9 @@ def compare_scene(
     ``None``; asked before every engine run, so that a stop skips the runs not yet
     started but keeps the finished ones (``metrics["engines_not_run"]`` lists the
     skipped engines). Stopped before the first run: ``(None, {})``.
+    :func:`run_validation` checks every scene first (:func:`check_scenes`); called
+    alone, an engine that does not model the scene raises ``UnsupportedFeatureError``
+    when it builds its model, before its own integration.
     """
     check_solver(solver, newton_euler="newton_euler" in engines)
     built = build_run(scene, duration=duration)
@@ -154,8 +190,8 @@ def compare_scene(
         metrics["exudyn_settings"] = exudyn_settings_for(run).__dict__.copy()
     if not_run:
         metrics["engines_not_run"] = not_run
-    for s in series.values():
-        s.ee_ideal = ideal_positions(run, s.t)
+    for s in series.values():  # no ideal motion without a platform-pose drive: the statistic is then None
+        s.ee_ideal = ideal_positions(run, s.t) if prescribes_end_effector(run) else None
     lagrange = series["lagrange"]
     window_end = lagrange.first_onset  # inf for the ideal mechanism: whole run
     stats_ref = CMP.statistics(lagrange, duration)
@@ -228,11 +264,9 @@ def summary_table(results: dict) -> str:
             pw = e.get("pointwise_before_first_impact", {})
             st = e["statistics"]
             peaks = ", ".join(f"{k} peak {v['peak_N']:.1f} N mean {v['mean_N']:.2f} N rms {v['rms_N']:.2f} N" for k, v in st["contact"].items())
-            line = f"  {name:13s} wall {e['wall_time_s']:7.1f} s"
-            if pw:
-                line += f"  dF {pw['driving_force_max_abs_N']:.3g} N ({pw['driving_force_max_rel']:.2g})  dEE {pw['ee_position_max_m']:.3g} m"
+            line = f"  {name:13s} wall {e['wall_time_s']:7.1f} s" + (_pointwise_text(pw) if pw else "")
             line += f"  impacts {st['n_impacts']}  {peaks}"
-            if "rms_ee_deviation_from_ideal_m" in st:
+            if st.get("rms_ee_deviation_from_ideal_m") is not None:
                 line += f"  EE rms dev {st['rms_ee_deviation_from_ideal_m']:.3g} m"
             if e.get("separation_time_1um_s") is not None:
                 line += f"  separates (1 um) at {e['separation_time_1um_s']:.4f} s"
@@ -242,6 +276,21 @@ def summary_table(results: dict) -> str:
         if m.get("engines_not_run"):
             lines.append(f"  not run: {', '.join(m['engines_not_run'])}")
     return "\n".join(lines)
+
+
+def _pointwise_text(pw: dict) -> str:
+    """The table's largest deviations from the Lagrange model: driving forces (dF), end effector (dEE), body origins (dBodies).
+
+    A quantity that was not compared (no actuator, nothing in the window) is left out.
+    """
+    text = ""
+    if pw.get("driving_force_max_abs_N") is not None:
+        text += f"  dF {pw['driving_force_max_abs_N']:.3g} N ({pw['driving_force_max_rel']:.2g})"
+    if pw.get("ee_position_max_m") is not None:
+        text += f"  dEE {pw['ee_position_max_m']:.3g} m"
+    if pw.get("body_position_max_m") is not None:
+        text += f"  dBodies {pw['body_position_max_m']:.3g} m"
+    return text
 
 
 def failure_report(results: dict, path: Path) -> str:
@@ -277,7 +326,11 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     """The study's options (``clearance validate``, :mod:`robot.cli.validate`)."""
     parser.add_argument("--out", default="results/validation", help="output directory (default results/validation)")
     parser.add_argument("--scenes", nargs="+", default=list(DEFAULT_SCENES), help=f"scenes (default {' '.join(DEFAULT_SCENES)})")
-    parser.add_argument("--duration", nargs="*", default=[], metavar="SCENE=T", help="override a scene's duration (s)")
+    parser.add_argument(
+        "--duration", nargs="*", default=[], metavar="SCENE=T",
+        help="simulated time of a scene (s); default: the study's horizons for its default scenes "
+        f"({', '.join(f'{k} {v:g} s' for k, v in DEFAULT_DURATIONS.items())}), every other scene its own duration",
+    )
     parser.add_argument("--engines", nargs="+", default=list(ENGINES[1:]), choices=ENGINES[1:], help="engines besides the Lagrange model")
     parser.add_argument("--exudyn-step", type=float, default=None, help="Exudyn step size with clearance joints (default 1e-5 s)")
     v = VALIDATION_SOLVER
@@ -299,9 +352,10 @@ def main(argv=None) -> int:
     args = parse_args(argv)
     try:
         solver_from_options(args)
-    except ValueError as exc:
+        check_scenes(args)
+    except ValueError as exc:  # UnsupportedFeatureError is one too
         raise SystemExit(f"validate: {exc}") from None
-    return 0 if run_validation(args)["success"] else 1
+    return 0 if run_validation(args, checked=True)["success"] else 1
 
 
 def solver_from_options(args: argparse.Namespace) -> SolverOptions:
@@ -337,7 +391,7 @@ def _option_message(exc: SceneError) -> str:
 
 
 def scene_durations(args: argparse.Namespace) -> dict[str, float]:
-    """Each scene's simulated time: :data:`DEFAULT_DURATIONS`, ``--duration SCENE=T`` overriding, 0.5 s for other scenes."""
+    """Each scene's simulated time: ``--duration SCENE=T``; else :data:`DEFAULT_DURATIONS` (the default study's scenes); else the scene's own ``duration``."""
     durations = dict(DEFAULT_DURATIONS)
     for item in args.duration:
         scene, _, value = item.partition("=")
@@ -345,11 +399,38 @@ def scene_durations(args: argparse.Namespace) -> dict[str, float]:
             durations[scene] = float(value)
         except ValueError:
             raise SystemExit(f"--duration {item!r}: expected SCENE=SECONDS") from None
-    return {scene: durations.get(scene, 0.5) for scene in args.scenes}
+    return {scene: durations[scene] if scene in durations else load_scene(scene).duration for scene in args.scenes}
 
 
-def run_validation(args: argparse.Namespace, stop_reason: Callable[[], str | None] = _no_stop) -> dict:
+def check_scenes(args: argparse.Namespace) -> None:
+    """Build every scene of ``args`` and check that each engine of ``args.engines`` models it; nothing is run.
+
+    ``UnsupportedFeatureError`` (exit status 2 on the command line) naming the
+    scene, the engine, the feature and what the engine supports.
+    """
+    durations = scene_durations(args)
+    for scene in args.scenes:
+        check_engines(scene, build_run(scene, duration=durations[scene]), args.engines)
+
+
+def check_engines(scene: str, run: Run, engines: Sequence[str]) -> None:
+    """``UnsupportedFeatureError`` if an engine of ``engines`` does not model the built ``run`` of ``scene`` (see :func:`check_scenes`)."""
+    checks = {"newton_euler": NE.check_supported, "exudyn": EX.check_supported}
+    for name in engines:
+        if name not in checks:
+            continue
+        try:
+            checks[name](run)
+        except UnsupportedFeatureError as exc:
+            raise UnsupportedFeatureError(f"--scenes {scene}: the {name} engine does not model this scene: {exc}", key="scenes", value=scene) from None
+
+
+def run_validation(args: argparse.Namespace, stop_reason: Callable[[], str | None] = _no_stop, *, checked: bool = False) -> dict:
     """Run the study of ``args`` (options checked: :func:`solver_from_options`); returns what validation.json holds.
+
+    First, unless ``checked`` (the caller ran it), :func:`check_scenes`: a scene
+    an engine does not model raises ``UnsupportedFeatureError`` before any run
+    and before anything is written.
 
     Nothing computed is lost: after every scene, validation.json is rewritten
     (atomically) and the scene's figures drawn, failed runs included (their
@@ -359,6 +440,8 @@ def run_validation(args: argparse.Namespace, stop_reason: Callable[[], str | Non
     are listed under ``interrupted``. ``results["success"]``: every run reached
     its end and nothing was skipped.
     """
+    if not checked:
+        check_scenes(args)
     durations = scene_durations(args)
     if args.exudyn_step is not None:
         EXUDYN_SETTINGS["clearance"] = dataclasses.replace(EXUDYN_SETTINGS["clearance"], step_size=args.exudyn_step)
