@@ -190,3 +190,18 @@ def test_a_child_without_name_is_named_after_its_file(tmp_path, capsys):
     named = load_scene(write(tmp_path / "sc" / "named.toml", 'extends = "compound"\nname = "mine"\n'))
     assert named.name == "mine" and load_scene(write(tmp_path / "sc" / "below.toml", 'extends = "named.toml"\n')).name == "below"
     assert check(capsys, child)[0] == EXIT_OK
+
+
+def test_a_folder_named_like_a_shipped_scene_does_not_hide_it(tmp_path, monkeypatch):
+    """``--out ideal`` leaves a folder ``ideal`` in the working directory: ``ideal`` (and ``extends = "ideal"``) stay the shipped scene."""
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "ideal").mkdir()
+    assert load_scene("ideal").name == "ideal"
+    child = write(tmp_path / "child.toml", 'extends = "ideal"\nname = "child"\nduration = 0.1\n')
+    assert load_scene(child).name == "child"
+    (tmp_path / "mine").mkdir()
+    with pytest.raises(SceneError, match="'mine' is a folder, not a scene file or a shipped scene"):
+        load_scene("mine")
+    (tmp_path / "folder.toml").mkdir()
+    with pytest.raises(SceneError, match="is a folder, not a scene file"):
+        load_scene("folder.toml")

@@ -281,13 +281,17 @@ def shipped_scenes() -> list[str]:
 def resolve_scene_path(name_or_path: str | Path) -> Path:
     """A shipped scene name, or a path to a TOML file."""
     candidate = Path(name_or_path)
-    if candidate.suffix == ".toml" or candidate.exists():
+    # a folder of the working directory named like a shipped scene (e.g. an --out folder "ideal") is not the scene
+    if candidate.suffix == ".toml" or candidate.is_file():
         if not candidate.is_file():
-            raise SceneError(f"scene file {str(candidate)!r} does not exist")
+            what = "is a folder, not a scene file" if candidate.is_dir() else "does not exist"
+            raise SceneError(f"scene file {str(candidate)!r} {what}")
         return candidate.resolve()
     shipped = SCENE_DIR / f"{name_or_path}.toml"
     if shipped.is_file():
         return shipped
+    if candidate.is_dir():
+        raise SceneError(f"scene {str(name_or_path)!r} is a folder, not a scene file or a shipped scene; shipped scenes: {', '.join(shipped_scenes())}")
     raise SceneError(f"scene {str(name_or_path)!r} is neither a file nor a shipped scene; shipped scenes: {', '.join(shipped_scenes())}")
 
 
@@ -473,9 +477,17 @@ def _clearance(table: Any, index: int, materials: dict[str, Material], where: st
         raise SceneError(f"{w}: outer_on={outer_on!r} must be 'child' or 'parent'", key="outer_on", value=outer_on)
 
     def material(key: str) -> Material:
-        name = table.get(key, table.get("material", "steel"))
+        written = key if key in table else "material" if "material" in table else None
+        name = table[written] if written else "steel"
         if name not in materials:
-            raise SceneError(f"{w}: {key}={name!r} is not defined; defined materials: {', '.join(materials) or 'none'}", key=key, value=name)
+            defined = f"defined materials: {', '.join(materials) or 'none'}"
+            if written is None:  # the default: name no key the user did not write
+                raise SceneError(
+                    f"{w}: no material is given, and the default material 'steel' is not defined ({defined}); define "
+                    "[materials.steel] (youngs_modulus, poisson_ratio) or set material = \"NAME\" in this [[clearance]] table",
+                    key="material", value=name,
+                )
+            raise SceneError(f"{w}: {written}={name!r} is not defined; {defined}", key=written, value=name)
         return materials[name]
 
     outer, inner = material("outer_material"), material("inner_material")
