@@ -196,7 +196,7 @@ def test_missing_result_file(tmp_path):
 def test_malformed_result_files(tmp_path):
     garbage = tmp_path / "garbage.npz"
     garbage.write_bytes(b"this is not an npz archive")
-    with pytest.raises(ResultFileError, match="not a readable"):
+    with pytest.raises(ResultFileError, match=r"not a result file \(.npz\) of `clearance run`"):
         export_html(garbage, tmp_path / "a.html")
     headless = tmp_path / "headless.npz"
     np.savez(headless, t=np.zeros(3))

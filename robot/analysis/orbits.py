@@ -17,9 +17,10 @@ whole |e| (``axis=None``). Normalised by the radial clearance c, the
 eccentricity ratio epsilon = |e_r| / c is 1 when the elements touch (rigid
 contact; > 1 while penetrating).
 
-Note: the simulator's own ``J_eccentricity`` output (``robot.results``) is
-this vector computed in the contact law; this module computes it from any body
-poses (e.g. of another engine, or measured).
+Note: the simulator's result holds this vector as ``J_centre_in_outer`` ((n, 3),
+every joint type; ``robot/io/results.py``), not as ``J_eccentricity``, the
+contact law's per contact row ((n, 2, 3) for revolute and translational joints);
+this module computes it from any body poses (e.g. of another engine, or measured).
 """
 
 from __future__ import annotations

@@ -34,7 +34,7 @@ KERNEL_COMMANDS: frozenset[str] = frozenset(
 #: one-line help of each command, for ``clearance --help`` without importing the modules
 SUMMARIES: dict[str, str] = {
     "run": "simulate one scene and write OUT/NAME.npz",
-    "paper": "reproduce the seed paper's study (figures 7-9, summary.json, animation)",
+    "paper": "reproduce the seed paper's study (figures 7-10, summary.json, claims.md, animation)",
     "animate": "play a result in meshcat (HTML file or live server)",
     "validate": "cross-check the model against Newton-Euler and Exudyn",
     "describe": "print a mechanism's bodies, joints, closures, mobility and mass",

@@ -47,9 +47,11 @@ is not uniform):
   crossing zero while in contact);
 * 3 ``RECORD_START``: the initial state (one record, the first);
 * 4 ``RECORD_OUTPUT``: a point of the regular output grid ``k * output_step``
-  (``SolverOptions.output_step``, set by the studies, never by a scene file),
-  from the dense output of the step containing it; select them with
-  ``result["record_kind"] == 4`` to compare runs at common times;
+  (``SolverOptions.output_step``: a scene's ``[output] step``, 2e-4 s unless
+  the scene sets another, none with ``step = 0``; sweeps and work-precision
+  runs set their own, the validation study none), from the dense output of the
+  step containing it; select them with ``result["record_kind"] == 4`` to
+  compare runs at common times;
 * 5 ``RECORD_FORCE_PEAK``: a candidate's normal-force maximum over the
   compression phase ending at a penetration maximum (``dF/dt = 0``, located on
   the dense output; with damping it precedes the penetration maximum), so the
@@ -335,6 +337,37 @@ def save_result(result: Result, path: str | Path, output: OutputSpec | None = No
     return atomic_write(path, write)
 
 
+#: the first bytes of a zip archive, hence of every .npz file
+ZIP_SIGNATURE = b"PK\x03\x04"
+
+
+def _read_archive(path: Path) -> dict[str, np.ndarray]:
+    """The arrays of the .npz file ``path``; a message fit for the user when it is none.
+
+    numpy's own messages are not quoted for a file that is no archive: for any other file
+    it suggests loading it with pickle (``allow_pickle``), i.e. running code from the file.
+    """
+    if path.is_dir():
+        raise ResultFileError(f"result file {str(path)!r} is a folder; give a result file (.npz) written by `clearance run`")
+    if not path.is_file():
+        raise ResultFileError(f"result file {str(path)!r} does not exist; run `clearance run` first")
+    try:
+        with open(path, "rb") as handle:
+            signature = handle.read(len(ZIP_SIGNATURE))
+    except OSError as exc:
+        raise ResultFileError(f"result file {str(path)!r} cannot be read ({exc.strerror or exc})") from None
+    if signature != ZIP_SIGNATURE:
+        raise ResultFileError(f"result file {str(path)!r} is not a result file (.npz) of `clearance run`; give a file it wrote (OUT/NAME.npz)")
+    try:
+        with np.load(path, allow_pickle=False) as archive:
+            return {key: archive[key] for key in archive.files}
+    except Exception as exc:  # noqa: BLE001 - any reading failure of a zip file means a damaged archive
+        raise ResultFileError(
+            f"result file {str(path)!r} is not a readable .npz archive ({exc}): it is incomplete or damaged; "
+            "write it again with `clearance run`"
+        ) from None
+
+
 def load_result(path: str | Path, *, urdf_text: str | None = None) -> Result:
     """Read a result file written by :func:`save_result`.
 
@@ -342,13 +375,7 @@ def load_result(path: str | Path, *, urdf_text: str | None = None) -> Result:
     ``urdf_text`` is given) if it was produced with another mechanism.
     """
     path = Path(path)
-    if not path.is_file():
-        raise ResultFileError(f"result file {str(path)!r} does not exist; run scripts/simulate.py first")
-    try:
-        with np.load(path, allow_pickle=False) as archive:
-            arrays = {key: archive[key] for key in archive.files}
-    except Exception as exc:  # noqa: BLE001 - any reading failure means a malformed file
-        raise ResultFileError(f"result file {str(path)!r} is not a readable .npz archive ({exc})") from None
+    arrays = _read_archive(path)
     if "__meta__" not in arrays:
         raise ResultFileError(f"result file {str(path)!r} has no header: it was not written by this simulator")
     try:

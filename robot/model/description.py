@@ -320,6 +320,76 @@ def _joints(root: ET.Element, link_set: set[str], label: str) -> dict[str, Joint
     return joints
 
 
+#: where a file's loops belong, for the messages refusing a joint tree that is not a tree
+LOOPS_GO_IN_CLOSURES = (
+    "a URDF's joints must form a tree (one parent joint per link, no loops); declare each loop-closing "
+    "joint in the <closures> element instead (docs/kinematics.md, section 2)"
+)
+
+
+def _parent_joints(joints: dict[str, JointDeclaration], label: str) -> dict[str, str]:
+    """Link -> the joint whose child it is; refuses a link that is the child of two joints."""
+    parent_joint: dict[str, str] = {}
+    for joint in joints.values():
+        earlier = parent_joint.get(joint.child)
+        if earlier is not None:
+            raise MechanismFileError(
+                f"{label}: link {joint.child!r} is the child of two joints, {earlier!r} (parent link "
+                f"{joints[earlier].parent!r}) and {joint.name!r} (parent link {joint.parent!r}); {LOOPS_GO_IN_CLOSURES}",
+                key=joint.child, value=(earlier, joint.name),
+            )
+        parent_joint[joint.child] = joint.name
+    return parent_joint
+
+
+def _check_no_cycle(links: list[str], joints: dict[str, JointDeclaration], parent_joint: dict[str, str], label: str) -> None:
+    """Refuse joints that lead from a link back to itself (urdfdom and Pinocchio fail on them without naming them)."""
+    reaches_root: set[str] = set()
+    for start in links:
+        chain: list[str] = []  # links walked up from ``start``, child first
+        link = start
+        while link in parent_joint and link not in reaches_root and link not in chain:
+            chain.append(link)
+            link = joints[parent_joint[link]].parent
+        if link in chain:  # walked back onto the chain: the joints from there on form a cycle
+            cycle = [parent_joint[member] for member in reversed(chain[chain.index(link):])]
+            path = " -> ".join([link] + [joints[name].child for name in cycle])
+            if len(cycle) == 1:
+                what = f"joint {cycle[0]!r} has link {link!r} as both its parent and its child"
+            else:
+                what = f"joints {', '.join(repr(name) for name in cycle)} form a cycle (links {path})"
+            raise MechanismFileError(f"{label}: {what}; {LOOPS_GO_IN_CLOSURES}", key=cycle[0], value=tuple(cycle))
+        reaches_root.update(chain)
+
+
+def _check_one_tree(links: list[str], joints: dict[str, JointDeclaration], parent_joint: dict[str, str], label: str) -> None:
+    """Refuse links that no chain of joints joins to the root (urdfdom's "two root links found")."""
+    children: dict[str, list[str]] = {}
+    for joint in joints.values():
+        children.setdefault(joint.parent, []).append(joint.child)
+    trees = [_subtree_links(link, children) for link in links if link not in parent_joint]
+    if len(trees) <= 1:
+        return
+    root_tree = max(trees, key=len)  # the largest tree is the mechanism; ties: the first in the file
+    apart = [link for link in links if link not in root_tree]
+    other_roots = [tree[0] for tree in trees if tree is not root_tree]
+    unjoined = ", ".join(repr(root) for root in other_roots)
+    raise MechanismFileError(
+        f"{label}: link(s) {', '.join(repr(link) for link in apart)} cannot be reached from the root link "
+        f"{root_tree[0]!r} by any chain of joints ({unjoined} {'is' if len(other_roots) == 1 else 'are'} the child "
+        f"of no joint); make {other_roots[0]!r} the child of a joint, or remove the link(s): a URDF's joints must "
+        "join all links into one tree",
+        key=other_roots[0], value=tuple(apart),
+    )
+
+
+def _check_tree(links: list[str], joints: dict[str, JointDeclaration], label: str) -> None:
+    """The joints must make one tree over the links: one parent joint per link, no cycle, nothing apart."""
+    parent_joint = _parent_joints(joints, label)
+    _check_no_cycle(links, joints, parent_joint, label)
+    _check_one_tree(links, joints, parent_joint, label)
+
+
 def _closure_axis(element: ET.Element, name: str, label: str) -> tuple[float, float, float]:
     axis_element = element.find("axis")
     if axis_element is None:
@@ -345,6 +415,12 @@ def _closures(root: ET.Element, joints: dict, link_set: set[str], label: str) ->
             raise MechanismFileError(f"{label}: closure {name!r} has type={kind!r}; valid types: {', '.join(CLOSURE_TYPES)}")
         parent = _frame(element.find("parent"), "parent", name, link_set, label)
         child = _frame(element.find("child"), "child", name, link_set, label)
+        if parent.link == child.link:  # its equations would hold two frames of one body together: never met
+            raise MechanismFileError(
+                f"{label}: closure {name!r} joins link {parent.link!r} to itself (its <parent> and <child> name the "
+                "same link); a closure joins two different links",
+                key=name, value=parent.link,
+            )
         axis = _closure_axis(element, name, label) if kind == "revolute" else None
         closures.append(ClosureDeclaration(name, kind, parent, child, axis))
     return closures
@@ -369,7 +445,9 @@ def parse_mechanism(source: str | Path, *, is_text: bool = False) -> MechanismDe
     """Parse a URDF file (or text, ``is_text=True``) with closure declarations.
 
     Raises :class:`MechanismFileError` for unreadable XML, a missing ``<robot>``
-    root, duplicate names, closures naming missing links, unknown closure types,
+    root, duplicate names, joints that do not form one tree (a link that is the
+    child of two joints, a cycle of joints, links joined to no root), closures
+    naming missing links or joining a link to itself, unknown closure types,
     a revolute closure without a non-zero axis, a transmission naming a
     missing joint, a mass or inertia out of range (module docstring) or a
     movable joint that carries no mass.
@@ -384,6 +462,7 @@ def parse_mechanism(source: str | Path, *, is_text: bool = False) -> MechanismDe
         raise MechanismFileError(f"{label}: root element is <{root.tag}>, a URDF needs <robot>")
     links = _links(root, label)
     joints = _joints(root, set(links), label)
+    _check_tree(links, joints, label)
     _check_moving_bodies_have_mass(joints, _massive_links(root, label), label)
     return MechanismDescription(
         path=path,

@@ -37,9 +37,15 @@ import numpy as np
 import pinocchio as pin
 
 from robot.model.description import CLEARANCE_TREE_KINDS, ClosureDeclaration, FrameOnLink, MechanismDescription, parse_mechanism
-from robot.errors import ClearanceChoiceError, ClosureDeclarationWarning, MechanismFileError
+from robot.errors import ClearanceChoiceError, ClosureDeclarationWarning, MechanismFileError, RobotWarning
 
 CLEARANCE_SIDES = ("child", "parent")
+#: how many folders above the URDF's are searched for meshes (``package://PKG/...`` with the file in ``PKG/urdf/``)
+MESH_FOLDER_PARENTS = 2
+
+
+class VisualGeometryWarning(RobotWarning):
+    """A mesh of the URDF's visuals or collision geometry could not be loaded; the mechanism is built without it."""
 
 
 @dataclass(frozen=True)
@@ -269,6 +275,88 @@ def _clearance_tree_joints(description: MechanismDescription, choice: Mapping[st
     return free_joints
 
 
+def _mesh_folders(description: MechanismDescription) -> list[str]:
+    """Where Pinocchio looks for meshes: the URDF's folder (relative file names), then its parent and grandparent
+    (``package://PKG/...`` of a file in ``PKG/`` or in a ROS package's ``PKG/urdf/``); none for URDF text."""
+    if description.path is None:
+        return []
+    folder = description.path.resolve().parent
+    return [str(folder)] + [str(parent) for parent in list(folder.parents)[:MESH_FOLDER_PARENTS]]
+
+
+def _mesh_found(filename: str, folders: Sequence[str]) -> bool:
+    """Whether a ``<mesh filename=...>`` names an existing file, resolved as Pinocchio resolves it with ``folders``."""
+    if filename.startswith("package://"):
+        candidates = [Path(folder) / filename[len("package://"):] for folder in folders]
+    elif filename.startswith("file://"):
+        candidates = [Path(filename[len("file://"):])]
+    elif Path(filename).is_absolute():
+        candidates = [Path(filename)]
+    else:
+        candidates = [Path(folder) / filename for folder in folders]
+    return any(candidate.is_file() for candidate in candidates)
+
+
+def _without_meshes(urdf_text: str, keep) -> tuple[str, list[str]]:
+    """The URDF text without the ``<visual>``/``<collision>`` meshes ``keep(filename)`` refuses, and those dropped."""
+    root = ET.fromstring(urdf_text)
+    dropped = []
+    for link in root.findall("link"):
+        for element in link.findall("visual") + link.findall("collision"):
+            mesh = element.find("geometry/mesh")
+            if mesh is not None and not keep(mesh.get("filename", "")):
+                link.remove(element)
+                dropped.append(f"{mesh.get('filename', '')!r} of link {link.get('name')!r}")
+    return ET.tostring(root, encoding="unicode"), list(dict.fromkeys(dropped))
+
+
+def _one_line(exc: Exception) -> str:
+    """A library's message on one line, without its final full stop (it is quoted inside ours)."""
+    return " ".join(str(exc).split()).rstrip(".")
+
+
+def _geometry_models(model: pin.Model, urdf_text: str, folders: Sequence[str]) -> tuple[pin.GeometryModel, pin.GeometryModel]:
+    extra = {"package_dirs": list(folders)} if folders else {}
+    return (
+        pin.buildGeomFromUrdfString(model, urdf_text, pin.GeometryType.VISUAL, **extra),
+        pin.buildGeomFromUrdfString(model, urdf_text, pin.GeometryType.COLLISION, **extra),
+    )
+
+
+def _geometry_without_failing_meshes(
+    model: pin.Model, description: MechanismDescription, urdf_text: str
+) -> tuple[pin.GeometryModel, pin.GeometryModel]:
+    """The visual and collision models; a mesh that cannot be loaded is left out with one warning.
+
+    Only the animation draws these geometries (the dynamics use the inertias), so a missing or
+    unreadable mesh must not stop a run or ``describe``. The meshes not found are dropped first;
+    if the rest still fails (e.g. a corrupt file), every mesh is.
+    """
+    folders = _mesh_folders(description)
+    try:
+        return _geometry_models(model, urdf_text, folders)
+    except (RuntimeError, ValueError) as exc:
+        error = _one_line(exc)
+    for keep in (lambda filename: _mesh_found(filename, folders), lambda filename: False):
+        text, dropped = _without_meshes(urdf_text, keep)
+        if not dropped:
+            continue
+        try:
+            geometry = _geometry_models(model, text, folders)
+        except (RuntimeError, ValueError) as exc:
+            error = _one_line(exc)
+            continue
+        searched = f"searched {', '.join(folders)}" if folders else "no folder to search: URDF given as text"
+        warnings.warn(
+            f"mechanism {description.name!r}: left out the mesh(es) {', '.join(dropped)}, which could not be loaded "
+            f"({error}; {searched}); the dynamics do not use them, the animation draws those links without them",
+            VisualGeometryWarning,
+            stacklevel=4,
+        )
+        return geometry
+    raise MechanismFileError(f"geometry of {description.name!r} could not be built: {error}")
+
+
 def _pinocchio_models(
     description: MechanismDescription, urdf_text: str, gravity: Sequence[float]
 ) -> tuple[pin.Model, pin.GeometryModel, pin.GeometryModel]:
@@ -277,11 +365,7 @@ def _pinocchio_models(
     except (RuntimeError, ValueError) as exc:
         raise MechanismFileError(f"Pinocchio could not build the model of {description.name!r}: {exc}") from None
     model.gravity = pin.Motion(_gravity_vector(gravity), np.zeros(3))
-    try:
-        visual_model = pin.buildGeomFromUrdfString(model, urdf_text, pin.GeometryType.VISUAL)
-        collision_model = pin.buildGeomFromUrdfString(model, urdf_text, pin.GeometryType.COLLISION)
-    except (RuntimeError, ValueError) as exc:
-        raise MechanismFileError(f"geometry of {description.name!r} could not be built: {exc}") from None
+    visual_model, collision_model = _geometry_without_failing_meshes(model, description, urdf_text)
     return model, visual_model, collision_model
 
 

@@ -68,6 +68,9 @@ ARROW_COLOR = 0xE01010
 BACKGROUND = ([1.0, 1.0, 1.0], [0.86, 0.88, 0.91])
 LINK_OPACITY = 0.35  # links that carry a clearance element
 ROOT = "mechanism"  # meshcat node (under /meshcat) holding everything drawn
+#: the largest magnification of the motion inside the clearance joints: beyond it the drawn gaps and offsets
+#: outgrow any view (and, near 1e38, meshcat's 32-bit floats, which then write infinities into the page)
+MAX_EXAGGERATION = 1e6
 
 
 class AnimationError(RobotError, ValueError):
@@ -100,8 +103,12 @@ class AnimationOptions:
             value = getattr(self, name)
             if not (isinstance(value, (int, float)) and math.isfinite(value) and value > 0):
                 raise AnimationError(f"{name}={value!r} must be a positive finite number")
-        if not (math.isfinite(self.exaggerate) and self.exaggerate >= 1.0):
-            raise AnimationError(f"exaggerate={self.exaggerate!r} must be a finite number >= 1 (1 = true scale)")
+        if not (isinstance(self.exaggerate, (int, float, np.floating)) and 1.0 <= self.exaggerate <= MAX_EXAGGERATION):
+            raise AnimationError(
+                f"exaggerate={self.exaggerate!r} is outside the valid range [1, {MAX_EXAGGERATION:,.0f}] "
+                "(1 = true scale; 1e6 draws a 0.1 mm gap 100 m wide)",
+                key="exaggerate", value=self.exaggerate,
+            )
         if self.trail_segments < 1 or self.max_frames < 1:
             raise AnimationError("trail_segments and max_frames must be positive")
 
@@ -166,35 +173,49 @@ def load_for_animation(
 ) -> tuple[Mechanism, SimulationResult]:
     """The result and the mechanism it was computed with (rebuilt and fingerprint-checked).
 
-    ``urdf`` defaults to ``urdf/<metadata['mechanism']>`` of this repository.
-    Raises :class:`ResultFileError` for a missing or malformed result, a missing
-    mechanism file, or a result computed with another mechanism.
+    ``urdf`` defaults to the first of these whose URDF fingerprint is the result's:
+    the file the run read (metadata ``mechanism_path``), then the shipped file of the
+    same name (metadata ``mechanism``: a result moved to another machine).
+    Raises :class:`ResultFileError` for a missing or malformed result, or when no
+    mechanism file tried matches (the message names each one and why).
     """
     label = "result" if isinstance(result, SimulationResult) else f"result file {str(result)!r}"
     if not isinstance(result, SimulationResult):
         result = load_result(result)
     metadata = result.metadata if isinstance(result.metadata, dict) else {}
-    if urdf is None:
-        name = metadata.get("mechanism")
-        if not isinstance(name, str) or not name:
-            raise ResultFileError(f"{label} does not name its mechanism file (metadata 'mechanism'); pass the URDF explicitly (--urdf)")
-        urdf = shipped_urdf(name)
-        recorded = metadata.get("mechanism_path")
-        if not Path(urdf).is_file() and isinstance(recorded, str) and Path(recorded).is_file():
-            urdf = Path(recorded)  # a user's mechanism, where the run found it
-    urdf = Path(urdf)
-    if not urdf.is_file():
-        raise ResultFileError(f"{label} needs the mechanism file {str(urdf)!r}, which does not exist; pass the URDF explicitly (--urdf)")
-    text = urdf.read_text(encoding="utf-8")
-    if metadata.get("urdf_sha256") != mechanism_fingerprint(text):
-        raise ResultFileError(
-            f"{label} was computed with mechanism {metadata.get('mechanism')!r} (another version or another "
-            f"mechanism), not with {str(urdf)!r}: its URDF fingerprint differs"
-        )
+    candidates = [Path(urdf)] if urdf is not None else _recorded_mechanism_files(metadata, label)
+    urdf = _matching_mechanism_file(candidates, metadata, label)
     choice = _clearance_choice(metadata, label)
     mechanism = build_mechanism(urdf, choice)
     _check_arrays(mechanism, result, label, site_types(mechanism, result, label))
     return mechanism, result
+
+
+def _recorded_mechanism_files(metadata: Mapping[str, Any], label: str) -> list[Path]:
+    """Where the result's mechanism file may be: the path the run read, then the shipped file of that name."""
+    name, recorded = metadata.get("mechanism"), metadata.get("mechanism_path")
+    candidates = [Path(recorded)] if isinstance(recorded, str) and recorded else []
+    if isinstance(name, str) and name:
+        candidates.append(shipped_urdf(name))
+    if not candidates:
+        raise ResultFileError(f"{label} does not name its mechanism file (metadata 'mechanism'); pass the URDF explicitly (--urdf)")
+    return candidates
+
+
+def _matching_mechanism_file(candidates: list[Path], metadata: Mapping[str, Any], label: str) -> Path:
+    """The first candidate whose text has the result's URDF fingerprint: a user's file may share a shipped file's name."""
+    tried = []
+    for path in candidates:
+        if not path.is_file():
+            tried.append(f"{str(path)!r} (does not exist)")
+            continue
+        if metadata.get("urdf_sha256") == mechanism_fingerprint(path.read_text(encoding="utf-8")):
+            return path
+        tried.append(f"{str(path)!r} (its URDF fingerprint differs: another version or another mechanism)")
+    raise ResultFileError(
+        f"{label} was computed with mechanism {metadata.get('mechanism')!r}, and no mechanism file tried matches it: "
+        f"{'; '.join(tried)}; pass the file the result was computed with (--urdf)"
+    )
 
 
 def site_types(mechanism: Mechanism, result: SimulationResult, label: str = "result") -> dict[str, type[ClearanceJoint]]:
@@ -615,16 +636,51 @@ def _draw_trails(vis, animation, trails: Mapping[str, list], options: AnimationO
             animation.at_frame(vis, b)[path].set_property("visible", "boolean", True)
 
 
+def _shape_points(shape, scale: np.ndarray) -> np.ndarray:
+    """Points on a visual's surface, in its own frame, that bound it closely (the view's sphere must hold them):
+    a box's corners, a cylinder's or capsule's rims, a sphere's poles; another shape (a mesh): its bounding box."""
+    if isinstance(shape, coal.Box):
+        half = np.asarray(shape.halfSide, dtype=float)
+        corners = np.array(np.meshgrid(*zip(-half, half), indexing="ij")).reshape(3, -1).T
+    elif isinstance(shape, (coal.Cylinder, coal.Capsule)):
+        angles = np.linspace(0.0, 2 * np.pi, 16, endpoint=False)
+        ring = np.column_stack([shape.radius * np.cos(angles), shape.radius * np.sin(angles), np.zeros(16)])
+        half = shape.halfLength + (shape.radius if isinstance(shape, coal.Capsule) else 0.0)
+        corners = np.vstack([ring + (0.0, 0.0, -half), ring + (0.0, 0.0, half)])
+    elif isinstance(shape, coal.Sphere):
+        corners = shape.radius * np.vstack([np.eye(3), -np.eye(3)])
+    else:
+        shape.computeLocalAABB()
+        box = shape.aabb_local
+        corners = np.array(np.meshgrid(*zip(box.min_, box.max_), indexing="ij")).reshape(3, -1).T
+    return corners * scale
+
+
+def _view_points(mechanism: Mechanism, data: pin.Data, geometry_data: pin.GeometryData) -> np.ndarray:
+    """The points the whole-mechanism view must hold: each visual's extent (a long link's origin is its
+    middle, not its ends) and the origins of the link and joint frames (links without visuals)."""
+    points = [frame.translation for frame in data.oMf[1:]] or [np.zeros(3)]
+    for geometry, placement in zip(mechanism.visual_model.geometryObjects, geometry_data.oMg):
+        try:
+            local = _shape_points(geometry.geometry, np.asarray(geometry.meshScale, dtype=float).ravel())
+        except (AttributeError, RuntimeError):  # a geometry coal cannot bound: its origin only
+            local = np.zeros((1, 3))
+        points.extend(local @ placement.rotation.T + placement.translation)
+    points = np.array(points, dtype=float)
+    finite = points[np.all(np.isfinite(points), axis=1)]  # a plane or half-space is unbounded
+    return finite if len(finite) else np.zeros((1, 3))
+
+
 def _set_view(vis, mechanism: Mechanism, q0: np.ndarray, sizes: Mapping[str, ElementSizes], focus: str | None = None) -> None:
     """Centre the view on the mechanism or on one clearance joint (the whole world is shifted rigidly) and place the camera."""
     model, data = mechanism.model, mechanism.model.createData()
     geometry_data = mechanism.visual_model.createData()
     pin.framesForwardKinematics(model, data, q0)
     pin.updateGeometryPlacements(model, data, mechanism.visual_model, geometry_data)
-    points = np.array([placement.translation for placement in geometry_data.oMg] or [np.zeros(3)])
+    points = _view_points(mechanism, data, geometry_data)
     low, high = points.min(axis=0), points.max(axis=0)
     centre = 0.5 * (low + high)
-    radius = max(0.5 * float(np.linalg.norm(high - low)), 0.1)
+    radius = max(float(np.max(np.linalg.norm(points - centre, axis=1))), 0.1)  # the sphere that holds every point
     direction = np.array([1.0, 0.75, 0.45])
     if focus is not None:
         site = mechanism.site(focus)
@@ -842,6 +898,20 @@ def external_references(html: str) -> list[str]:
     return found
 
 
+def check_not_the_result(result: str | Path | SimulationResult, html_path: str | Path, option: str = "html_path") -> None:
+    """Refuse to write the page over the result file it is made from (the result would be lost)."""
+    if isinstance(result, SimulationResult):
+        return
+    source, target = Path(result), Path(html_path)
+    same = source.resolve() == target.resolve() or (source.exists() and target.exists() and source.samefile(target))
+    if same:
+        raise AnimationError(
+            f"{option}={str(html_path)!r} is the result file being animated; writing the page there would replace "
+            f"the result: give another file name, e.g. {str(target.with_suffix('.html'))!r}",
+            key=option, value=str(html_path),
+        )
+
+
 def _check_focus(mechanism: Mechanism, options: AnimationOptions) -> None:
     if options.focus is not None and options.focus not in mechanism.clearance_names:
         raise AnimationError(
@@ -875,6 +945,7 @@ def export_html(
     meshcat, _ = _meshcat()
     opts = AnimationOptions(speed=speed, exaggerate=exaggerate, fps=fps, **options)
     opts.check()
+    check_not_the_result(result, html_path)
     mechanism, result = load_for_animation(result, urdf)
     _check_focus(mechanism, opts)
     recorder = _SceneRecorder(_caption(result, opts), opts.speed)
