@@ -36,8 +36,8 @@ def run_cli(capsys, *argv) -> tuple[int, str, str]:
 @pytest.mark.parametrize(
     "options, named",
     [
-        (("--rtol", "5"), ["--rtol=5.0", "[1e-14, 0.1]"]),
-        (("--rtol", "1e-30"), ["--rtol=1e-30", "[1e-14, 0.1]"]),
+        (("--rtol", "5"), ["--rtol=5.0", "[1e-13, 0.1]"]),
+        (("--rtol", "1e-30"), ["--rtol=1e-30", "[1e-13, 0.1]"]),
         (("--atol", "1"), ["--atol=1.0", "0.1]"]),
         (("--max-step", "0"), ["--max-step=0.0", "out of range"]),
         (("--first-step", "1", "--max-step", "0.001"), ["--first-step=1.0", "(0, 0.001]", "--max-step"]),

@@ -61,16 +61,21 @@ def execute(args: argparse.Namespace) -> int:
         result.counts["compile_cpu_time"] = compile_time
         stops.phase = Phase.SAVING
         path, where_asked = save_or_fallback(result, path, run.scene.output)
-    print(f"{run.scene.name}: {result.message}\n{counts_line(result.counts)}\n  wrote {path}")
+    print(f"{run.scene.name}: {result.message}\n{counts_line(result.counts, finished=result.success)}\n  wrote {path}")
     return EXIT_OK if result.success and where_asked else EXIT_RUN_FAILED
 
 
-def counts_line(counts: dict) -> str:
-    """The run's counters for people (``n/a`` where a solver does not count)."""
+def counts_line(counts: dict, finished: bool = True) -> str:
+    """The run's counters for people (``n/a`` where a solver does not count).
+
+    ``finished``: the run reached its end. A failed or interrupted run's rejected
+    steps are not counted (the step loop leaves out its last solver's), so they are ``n/a``.
+    """
     compile_time = counts.get("compile_cpu_time")
     compiled = f" (+ {compile_time:.2f} s compiling the kernels)" if compile_time is not None else ""
+    rejected = counts.get("n_rejected") if finished else None
     return (
-        f"  steps {count_text(counts.get('n_steps'))}, rejected {count_text(counts.get('n_rejected'))}, "
+        f"  steps {count_text(counts.get('n_steps'))}, rejected {count_text(rejected)}, "
         f"rhs calls {count_text(counts.get('n_rhs'))}, events {count_text(counts.get('n_events'))}, "
         f"cpu {count_text(counts.get('cpu_time'), '.2f')} s{compiled}"
     )

@@ -49,11 +49,11 @@ from robot.cli.common import (
     EXIT_INTERRUPTED, EXIT_OK, EXIT_RUN_FAILED, UsageError, number_list, positive_int, positive_number, positive_seconds, writable_folder,
 )
 from robot.cli.interrupts import Phase, clean_stops
-from robot.integration.solvers import JACOBIAN_METHODS, METHODS
+from robot.integration.solvers import FIXED_STEP_METHODS, JACOBIAN_METHODS, METHODS
 from robot.run import build_run
 from robot.integration.simulation import SolverOptions
 from robot.integration.options import STRUCTURED
-from robot.scene.loader import shipped_scenes
+from robot.scene.loader import RTOL_RANGE, shipped_scenes, smallest_step
 from robot.analysis.studies import speed, stability
 from robot.analysis.studies.common import INTERRUPTED, StudyStopped, run_or_stop, simulate
 from robot.analysis.studies import work_precision as wp
@@ -98,7 +98,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "--candidates",
         default="LSODA:1e-6,LSODA:1e-5,RK45:1e-7,CVODE_BDF:1e-6,CVODE_BDF:1e-6:finite-difference,CVODE_Adams:1e-5",
         help="other METHOD:RTOL[:JACOBIAN] (atol = rtol/100, max_step 1e-3; JACOBIAN structured or finite-difference) "
-        "to time over the real-time horizon ('' for none)",
+        f"to time over the real-time horizon ('' for none); variable-step methods only, RTOL in [{RTOL_RANGE[0]:g}, {RTOL_RANGE[1]:g}]",
     )
     parser.add_argument(
         "--long-horizon", action="store_true",
@@ -106,9 +106,18 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "(peak forces, impulses, energy balance, drift: statistics, the trajectories separate)",
     )
     parser.add_argument("--methods", default=None, help=f"comma-separated subset of {', '.join(METHODS)}")
-    parser.add_argument("--steps", type=number_list, default=None, help="comma-separated step sizes of the fixed-step methods (default: per method)")
-    parser.add_argument("--tolerances", type=number_list, default=None, help="comma-separated rtol values of the variable-step methods")
-    parser.add_argument("--max-step", type=positive_number, default=1e-3, help="max_step of the variable-step methods in the sweep (s)")
+    parser.add_argument(
+        "--steps", type=number_list, default=None,
+        help="comma-separated step sizes of the fixed-step methods (default: per method; each >= the scene's limits.min_step)",
+    )
+    parser.add_argument(
+        "--tolerances", type=number_list, default=None,
+        help=f"comma-separated rtol values of the variable-step methods, each in [{RTOL_RANGE[0]:g}, {RTOL_RANGE[1]:g}] (a scene's rtol range)",
+    )
+    parser.add_argument(
+        "--max-step", type=positive_number, default=1e-3,
+        help="max_step of the variable-step methods in the sweep (s; >= the scene's limits.min_step, CVODE >= 1e-12)",
+    )
     parser.add_argument("--output-step", type=positive_number, default=1e-4, help="common output grid for pointwise errors (s)")
 
 
@@ -398,7 +407,40 @@ def _checked_methods(args: argparse.Namespace) -> list[str]:
     unknown = [m for m in methods if m not in METHODS]
     if unknown:
         raise UsageError(f"--methods: {', '.join(map(repr, unknown))} not on offer; choose from {', '.join(METHODS)}")
+    for tolerance in args.tolerances or ():
+        _check_rtol(tolerance, f"--tolerances={','.join(f'{t:g}' for t in args.tolerances)}")
     return methods
+
+
+def _check_rtol(rtol: float, option: str) -> None:
+    """``UsageError`` if ``rtol`` is outside a scene's ``[solver] rtol`` range (:data:`robot.scene.loader.RTOL_RANGE`)."""
+    low, high = RTOL_RANGE
+    if not low <= rtol <= high:
+        why = ": scipy's integrators replace an rtol below 100 eps = 2.2e-14 by 2.2e-14" if rtol < low else ""
+        raise UsageError(f"{option}: rtol {rtol:g} is out of range [{low:g}, {high:g}] (the range of a scene's [solver] rtol{why})")
+
+
+def _check_steps(args: argparse.Namespace, methods: list[str], limits) -> None:
+    """``--steps`` and ``--max-step`` not below the smallest step the scene's runs can take (checked before any run)."""
+    if args.skip_sweep:
+        return
+    if args.steps and any(method in FIXED_STEP_METHODS for method in methods):
+        for h in args.steps:
+            if h < limits.min_step:
+                raise UsageError(
+                    f"--steps: step {h:g} s is out of range [{limits.min_step:g}, inf): a fixed-step method's step must be >= "
+                    f"the scene's limits.min_step = {limits.min_step:g} s"
+                )
+    for method in methods:
+        if method in FIXED_STEP_METHODS:
+            continue
+        floor = smallest_step(method, limits)
+        if args.max_step < floor:
+            whose = f"the smallest step {method} takes" if floor > limits.min_step else "the scene's limits.min_step"
+            raise UsageError(
+                f"--max-step={args.max_step:g} is out of range [{floor:g}, inf) for {method}: it must be >= {whose} "
+                f"({floor:g} s); a run with a smaller largest step can never proceed"
+            )
 
 
 def execute(args: argparse.Namespace) -> int:
@@ -406,6 +448,7 @@ def execute(args: argparse.Namespace) -> int:
     candidates = _candidates(args.candidates)  # checked before any run
     with clean_stops() as stops:
         run = build_run(args.scene)  # a stop before the benchmark has ended: exit 130, nothing written
+        _check_steps(args, methods, run.scene.limits)
         out = writable_folder(args.out or Path("results") / "work_precision" / run.scene.file_stem)
         phases = _Phases(args, run, out, stop=lambda: stops.requested)
         stops.saving = f"saving the finished runs to {phases.json_path}"
@@ -429,14 +472,24 @@ def execute(args: argparse.Namespace) -> int:
 def _candidates(text: str) -> list[SolverOptions]:
     """``--candidates METHOD:RTOL[:JACOBIAN],...`` as solver options (checked before any run)."""
     candidates = []
+    variable_step = [m for m in METHODS if m not in FIXED_STEP_METHODS]
     for spec in filter(None, text.split(",")):
-        method, rtol, *jacobian = spec.split(":")
+        parts = spec.split(":")
+        if len(parts) not in (2, 3):
+            raise UsageError(f"--candidates {spec!r}: expected METHOD:RTOL[:JACOBIAN] (e.g. RK45:1e-7 or CVODE_BDF:1e-6:finite-difference)")
+        method, rtol, *jacobian = parts
         if method not in METHODS:
             raise UsageError(f"--candidates {spec!r}: method {method!r} is not on offer; choose from {', '.join(METHODS)}")
+        if method in FIXED_STEP_METHODS:
+            raise UsageError(
+                f"--candidates {spec!r}: {method} is a fixed-step method: it takes a step size (--steps in the sweep), not a tolerance; "
+                f"candidates are variable-step methods: {', '.join(variable_step)}"
+            )
         try:
             tolerance = number_list(rtol)[0]
             options = SolverOptions(method, rtol=tolerance, atol=tolerance * 1e-2, max_step=1e-3, jacobian=jacobian[0] if jacobian else STRUCTURED)
         except (ValueError, TypeError, argparse.ArgumentTypeError) as exc:
             raise UsageError(f"--candidates {spec!r}: expected METHOD:RTOL[:JACOBIAN] ({exc})") from None
+        _check_rtol(tolerance, f"--candidates {spec!r}")
         candidates.append(options)
     return candidates

@@ -140,6 +140,13 @@ MAX_MISALIGNMENT_DEG = 5.0
 #: default output grid (s): 5 kHz
 DEFAULT_OUTPUT_STEP = 2e-4
 _SOLVER_KEYS = {"method", "rtol", "atol", "max_step", "first_step", "jacobian"}
+#: valid ``[solver] rtol`` (closed range): the one definition, used by the scenes and by
+#: ``clearance work-precision --tolerances/--candidates``. The lower bound is what the
+#: integrators honour: scipy's methods replace an rtol below ``100 * eps`` (2.2e-14) by
+#: it with a warning, so a smaller value would be run as another than the one recorded.
+RTOL_RANGE = (1e-13, 1e-1)
+#: valid ``[solver] atol`` (closed range)
+ATOL_RANGE = (1e-16, 1e-1)
 _BAUMGARTE_KEYS = {"alpha", "beta"}
 _LIMIT_KEYS = {"penetration_ratio", "max_residual", "min_step", "max_wall_time", "max_steps"}
 _MATERIAL_KEYS = {"youngs_modulus", "poisson_ratio"}
@@ -693,12 +700,14 @@ def solver_options(solver_table: dict, where: str) -> SolverOptions:
     w = f"{where} [solver]"
     _unknown(solver_table, _SOLVER_KEYS, w)
     method = solver_table.get("method", "RK45")
+    if not isinstance(method, str):
+        raise SceneError(f"{w}: method={method!r} must be a method name (a string); choose one of {', '.join(METHODS)}", key="method", value=method)
     if method not in METHODS:
         hint = " (the CVODE methods need the scikit-sundae package: pip install scikit-sundae)" if method.startswith("CVODE") else ""
         raise SceneError(f"{w}: method={method!r} is not on offer{hint}; choose one of {', '.join(METHODS)}", key="method", value=method)
     numbers = (
-        _number(solver_table, "rtol", w, 1e-7, low=1e-14, high=1e-1),
-        _number(solver_table, "atol", w, 1e-9, low=1e-16, high=1e-1),
+        _rtol(solver_table, w),
+        _number(solver_table, "atol", w, 1e-9, low=ATOL_RANGE[0], high=ATOL_RANGE[1]),
         _number(solver_table, "max_step", w, 1e-3, low=0.0, low_open=True),
         _number(solver_table, "first_step", w, None, low=0.0, low_open=True),
     )
@@ -709,6 +718,52 @@ def solver_options(solver_table: dict, where: str) -> SolverOptions:
     if method in FIXED_STEP_METHODS and solver.first_step is None:
         raise SceneError(f"{w}: the fixed-step method {method} needs first_step (its step size)", key="first_step", value=None)
     return solver
+
+
+def smallest_step(method: str, limits: FailureLimits) -> float:
+    """The smallest ``max_step`` a run of ``method`` can take: ``limits.min_step`` (a smaller step is a
+    step-size collapse), or the method's own floor if larger (CVODE is given ``min_step`` 1e-12 s and
+    refuses a smaller ``max_step``)."""
+    own = getattr(METHODS[method], "min_step", None)
+    return max(limits.min_step, float(own)) if isinstance(own, (int, float)) and not isinstance(own, bool) else limits.min_step
+
+
+def check_steps(solver: SolverOptions, limits: FailureLimits, where: str) -> None:
+    """``[solver] max_step`` not below :func:`smallest_step`, ``first_step`` (a fixed-step method's step) not below ``limits.min_step``.
+
+    Such a run could never proceed: a variable-step method's steps would all be a
+    step-size collapse (CVODE refuses the ``max_step`` outright), a fixed-step run
+    would creep until ``max_steps`` stops it.
+    """
+    w = f"{where} [solver]"
+    floor = smallest_step(solver.method, limits)
+    if solver.max_step < floor:
+        bound = f"limits.min_step = {limits.min_step:g} s"
+        if floor > limits.min_step:
+            bound = f"{floor:g} s, the smallest step {solver.method} takes (limits.min_step = {limits.min_step:g} s)"
+        raise SceneError(
+            f"{w}: max_step={solver.max_step!r} must be >= {bound}: a run with a smaller largest step can never proceed",
+            key="max_step",
+            value=solver.max_step,
+        )
+    if solver.first_step is not None and solver.first_step < limits.min_step:
+        what = f"the step of the fixed-step method {solver.method}" if solver.method in FIXED_STEP_METHODS else "a first step"
+        raise SceneError(
+            f"{w}: first_step={solver.first_step!r} must be >= limits.min_step = {limits.min_step:g} s: {what} below it is a step-size collapse",
+            key="first_step",
+            value=solver.first_step,
+        )
+
+
+def _rtol(solver_table: dict, where: str) -> float:
+    """``rtol`` in :data:`RTOL_RANGE`; below it, the message says why (the integrators would not honour it)."""
+    try:
+        return _number(solver_table, "rtol", where, 1e-7, low=RTOL_RANGE[0], high=RTOL_RANGE[1])
+    except SceneError as exc:
+        value = solver_table.get("rtol")
+        if isinstance(value, (int, float)) and not isinstance(value, bool) and 0 < value < RTOL_RANGE[0]:
+            raise SceneError(f"{exc} (the integrators' floor, rounded up: scipy's replace an rtol below 100 eps = 2.2e-14 by 2.2e-14)", key="rtol", value=value) from None
+        raise
 
 
 def _baumgarte(table: dict, where: str) -> Baumgarte:
@@ -748,6 +803,7 @@ def scene_from_document(data: dict[str, Any], path: Path, base_dir: Path) -> Sce
     solver = solver_options(_table(data, "solver", where), where)
     baumgarte = _baumgarte(_table(data, "baumgarte", where), where)
     limits = _limits(_table(data, "limits", where), where)
+    check_steps(solver, limits, where)
     materials = _materials(data, where)
     clearance_list = data.get("clearance", [])
     if not isinstance(clearance_list, list):
