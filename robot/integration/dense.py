@@ -9,9 +9,13 @@ exact for cubic polynomials, error ``h^4 max|y''''| / 384`` (Hairer, Norsett and
 Wanner, *Solving ODEs I*, II.6). The dense output of the fixed-step methods
 (:mod:`robot.integration.solvers`) and, for methods whose step cannot be redone
 alone, of the force-peak search's earlier steps (:mod:`robot.integration.force_peaks`).
+:class:`RestepDense`: the fixed-step methods' states inside a step as steps of
+the method from the step's start (the contact onsets' dense output).
 """
 
 from __future__ import annotations
+
+from typing import Callable
 
 import numpy as np
 from robot.integration.solver_base import DenseOutput
@@ -39,3 +43,29 @@ def _basis(s):
     """The cubic Hermite basis functions (module docstring) at ``s`` (a float or an array)."""
     s2, s3 = s**2, s**3
     return 2 * s3 - 3 * s2 + 1, s3 - 2 * s2 + s, -2 * s3 + 3 * s2, s3 - s2
+
+
+class RestepDense(DenseOutput):
+    """The states inside a fixed-step method's step ``[t_old, t]`` as steps of the method itself from the step's start.
+
+    ``restep(h)`` is the method's step of size ``h`` from the step's start state
+    ``y_old`` (at ``t_old``), so the state at ``t_old + h`` is as accurate as the
+    method's steps (local error ``O(h^(p+1))`` for a method of order p) and uses
+    the right-hand side up to ``t_old + h`` only. An interpolant of the step's
+    ends (:class:`HermiteDense`) carries what the end and the late stages met: a
+    fixed-step method accepts a step whose late stages cross into a contact,
+    where an adaptive method's error control would reject it, so the step loop
+    locates contact onsets and takes the restart state on this one
+    (:meth:`robot.integration.event_loop.EventDrivenIntegrator.onset_dense_output`).
+    Each time costs one step of the method.
+    """
+
+    def __init__(self, t_old: float, t: float, y_old: np.ndarray, restep: Callable[[float], np.ndarray]):
+        super().__init__(t_old, t)
+        self.y_old, self.restep = y_old, restep
+
+    def _call_impl(self, t):
+        if isinstance(t, float) or t.ndim == 0:
+            h = float(t) - float(self.t_old)
+            return self.y_old if h == 0.0 else self.restep(h)
+        return np.column_stack([self._call_impl(float(tt)) for tt in t])

@@ -9,17 +9,21 @@ cross-check (:class:`robot.validation.newton_euler.NewtonEulerSystem`) both run
 through it. Like ``OdeSolver.step()``, :meth:`EventDrivenIntegrator.step` is one
 small overridable unit; it is made of these steps, each its own method:
 
-1. :meth:`~EventDrivenIntegrator.advance`: the solver's step; a failed step,
+1. :meth:`~EventDrivenIntegrator.advance`: the solver's step (a fixed-step
+   method's with the approach rates as onset rates of the candidates out of
+   contact, :meth:`~EventDrivenIntegrator.set_step_onset_rates`); a failed step,
    a step-size collapse (variable-step methods) or a non-finite state stops the
    run (``_Failure``); the system is probed at the step's end (penetrations,
    their rates, normal forces, constraint residual);
 2. :meth:`~EventDrivenIntegrator.find_onsets`: the candidates whose penetration
-   crossed zero upward, located on the step's dense output (Brent's method), and
-   the impacts hidden inside the step (:mod:`robot.integration.events`);
+   crossed zero upward, located on the step's dense output (Brent's method; a
+   fixed-step method's states redone as steps from the step's start,
+   :meth:`~EventDrivenIntegrator.onset_dense_output`), and the impacts hidden
+   inside the step (:mod:`robot.integration.events`);
 3. :meth:`~EventDrivenIntegrator.restart_at_onset`: the step is cut at the
-   earliest onset, the approach rate is stored as that candidate's onset rate
-   ``ddelta0`` (Lankarani-Nikravesh, MODEL-NOTES 4; floored by
-   ``clearance_contact.ONSET_RATE_FLOOR``) and the solver restarted there;
+   earliest onset, the state there checked as in 4., the approach rate is stored
+   as that candidate's onset rate ``ddelta0`` (Lankarani-Nikravesh, MODEL-NOTES 4;
+   floored by ``clearance_contact.ONSET_RATE_FLOOR``) and the solver restarted there;
 4. :meth:`~EventDrivenIntegrator.check_failures`: penetration beyond its physical
    bound, constraint drift, wall time;
 5. :meth:`~EventDrivenIntegrator.locate_peaks`: penetration maxima (rate crossing
@@ -46,7 +50,7 @@ from robot.dynamics.probe import Probe as ContactProbe  # the step loop's name f
 from robot.integration import methods as registry
 from robot.integration.brent import NoSignChange, brentq
 from robot.integration.events import HIDDEN, ONSET, OVER_BOUND, PEAK, all_finite, first_contact_time, hidden_contact, step_flags
-from robot.integration.force_peaks import ForcePeaks, derivative_or_inf
+from robot.integration.force_peaks import ForcePeaks, derivative_or_refused, refused_stage_value
 from robot.integration.options import STALL_WINDOW, FailureLimits, SolverOptions
 from robot.integration.records import FAILED, SUCCESS, OutputTimes, Records, Trajectory
 from robot.integration import records as R
@@ -56,6 +60,10 @@ from robot.integration.solvers import SecondOrderStructure, make_solver
 MAX_STALLED_RESTARTS = 20
 #: consecutive STALL_WINDOWs too slow for FailureLimits.max_steps before the run is declared stalled
 STALLED_WINDOWS = 2
+#: a step below FailureLimits.min_step but above this fraction of the run's span is short because the span is
+#: (LSODA's first step on a 1e-10 s span is 1e-13 s): the collapse message then says to lower min_step. The
+#: user's limit itself is kept: a run that must not take steps below it fails there.
+SHORT_SPAN_STEP_FRACTION = 1e-6
 _NONE = np.zeros(0, dtype=np.intp)
 
 
@@ -65,7 +73,7 @@ class EventSystem(Protocol):
     The loop owns the onset rates (one per contact candidate, the contact state of
     the Lankarani-Nikravesh law) and passes them in. ``derivative`` and ``probe``
     raise ``clearance_contact.ContactError`` in a pose the contact laws refuse
-    (the loop answers a trial stage with ``inf``, an accepted state with the
+    (the loop answers a trial stage with ``inf`` or NaN, an accepted state with the
     failure "unphysical pose").
     """
 
@@ -91,6 +99,20 @@ class EventSystem(Protocol):
 
     def replica(self) -> "EventSystem":
         """The same system on its own work data (the force-peak search replays steps with it)."""
+
+
+def onset_rate(approach_rate):
+    """The onset rate ``ddelta0`` of an impact starting at ``approach_rate`` (m/s): floored, Lankarani-Nikravesh divides by it."""
+    return np.maximum(approach_rate, ONSET_RATE_FLOOR)
+
+
+def distinct_texts(value: float, limit: float) -> tuple[str, str]:
+    """``value`` and ``limit`` printed with the fewest digits (at least 4) that tell them apart (1.000e-13 below 1.0e-13 reads false)."""
+    for digits in range(3, 17):
+        texts = f"{value:.{digits}e}", f"{limit:.{digits}e}"
+        if texts[0] != texts[1]:
+            break
+    return texts
 
 
 class _Failure(Exception):
@@ -138,7 +160,10 @@ class EventDrivenIntegrator:
         self.t0, self.t_final = map(float, t_span)
         self.t, self.y = self.t0, system.normalise(np.asarray(y0, dtype=float))
         self.onset = np.full(system.n_candidates, ONSET_RATE_FLOOR)
-        self.fun = derivative_or_inf(system, self.onset)  # reads the onset rates in place
+        # the onset rates the solver's right-hand sides read (in place): the contact state itself, except
+        # for the fixed-step methods (set_step_onset_rates)
+        self.step_onset = self.onset.copy() if self.traits.fixed_step else self.onset
+        self.fun = derivative_or_refused(system, self.step_onset, refused_stage_value(self.traits))
         self.records, self.events = Records(system.n_candidates), []
         self.outputs, self.progress = outputs, progress
         self.force_peaks = ForcePeaks(system, options, self.records) if locate_force_peaks else None
@@ -203,7 +228,7 @@ class EventDrivenIntegrator:
         given = self.initial_onset_rates
         for k in np.flatnonzero(self.pen > 0):
             continued = given is not None and np.isfinite(given[k])
-            self.onset[k] = max(given[k] if continued else self.rate[k], ONSET_RATE_FLOOR)
+            self.onset[k] = onset_rate(given[k] if continued else self.rate[k])
 
     def start_solver(self) -> None:
         """A new solver from the current state (at the start and after every onset)."""
@@ -212,9 +237,11 @@ class EventDrivenIntegrator:
         self.calls_at_start = system.rhs_calls
         self.dense_calls = 0
         self.accepted_here = 0
+        if self.traits.fixed_step:
+            self.set_step_onset_rates()  # the new solver evaluates its first derivative with them
         jacobian = None
         if self.traits.takes_jacobian and system.jacobian is not None:
-            onset = self.onset
+            onset = self.step_onset
             jacobian = lambda t, y, out=None: system.jacobian(t, y, onset, out)  # noqa: E731
         self.solver = make_solver(
             options.method, self.fun, self.t, self.y, self.t_final, options.rtol, options.atol, options.max_step, self.first_step, system.structure, jacobian
@@ -233,8 +260,10 @@ class EventDrivenIntegrator:
             return
         stages = self.traits.stages
         if stages is not None:
-            # an explicit Runge-Kutta attempt costs `stages` calls (FSAL); the dense outputs' extra stages are not attempts
-            attempts = (calls - self.calls_after_init - self.dense_calls) / stages
+            # an explicit Runge-Kutta attempt costs `stages` calls (FSAL); the dense outputs' extra stages and
+            # the steps redone to locate contact onsets (restep dense outputs) are not attempts
+            restep_calls = getattr(solver, "n_restep_calls", 0)
+            attempts = (calls - self.calls_after_init - self.dense_calls - restep_calls) / stages
             counts["rejected"] += max(0, int(round(attempts)) - self.accepted_here)
         elif getattr(solver, "n_rejected", None) is not None and counts["rejected"] >= 0:
             counts["rejected"] += solver.n_rejected
@@ -249,7 +278,7 @@ class EventDrivenIntegrator:
     def step(self) -> bool:
         """One accepted solver step and what happened in it; True if the run restarts at a contact onset."""
         step = self.advance()
-        self.dense = None
+        self.dense = self.onset_dense = None
         probe = step.probe
         flags = step_flags(self.pen, self.rate, probe.penetration, probe.penetration_rate, self.system.penetration_bounds)
         if flags & (ONSET | HIDDEN):
@@ -257,7 +286,7 @@ class EventDrivenIntegrator:
             if found:
                 self.restart_at_onset(step, found)
                 return True
-        self.check_failures(step, flags)
+        self.check_failures(step.t_new, probe, bool(flags & OVER_BOUND))
         if flags & PEAK:
             self.locate_peaks(self.dense_output(), step.t_old, step.t_new, probe.penetration_rate)
         self.accept(step)
@@ -266,6 +295,8 @@ class EventDrivenIntegrator:
     def advance(self) -> _Step:
         """The solver's next accepted step, checked and probed at its end."""
         solver = self.solver
+        if self.traits.fixed_step:
+            self.set_step_onset_rates()
         message = solver.step()
         if solver.status == "failed":
             raise _Failure(getattr(solver, "failure_cause", None) or "step size collapse", f"t={solver.t:.9g} s: {message}")
@@ -275,12 +306,37 @@ class EventDrivenIntegrator:
         if not self.traits.fixed_step and t_new < self.t_final:
             h = solver.step_size
             if h is not None and h < self.limits.min_step:
-                raise _Failure("step size collapse", f"t={t_new:.9g} s: step size {h:.3e} s below {self.limits.min_step:.1e} s")
+                raise _Failure("step size collapse", self.collapse_message(t_new, h))
         if not all_finite(y_new):
             raise _Failure("non-finite state", f"t={t_new:.9g} s: the state is not finite")
         if steps % STALL_WINDOW == 0:
             self.check_pace(t_new)
         return _Step(solver.t_old, t_new, y_new, self.probe(t_new, y_new))
+
+    def set_step_onset_rates(self) -> None:
+        """Before a fixed-step method's step: a candidate out of contact gets its approach rate as onset rate.
+
+        A candidate that comes into contact during the step meets it in the late
+        stages, with the onset rate the right-hand side reads: the stored one is
+        the floor or the last impact's, and Lankarani-Nikravesh damping divides by
+        it, so with the floor (1e-4 m/s) it is ~1e4 times too large: it throws the
+        bodies apart or stalls the Newton iterations of the implicit methods. An
+        adaptive method rejects such a step by its error control; a fixed-step
+        method accepts it. The approach rate at the step's start is the coming
+        impact's to O(h). The candidates in contact keep their impact's onset rate.
+        """
+        out_of_contact = self.pen <= 0
+        self.step_onset[:] = self.onset
+        self.step_onset[out_of_contact] = onset_rate(self.rate[out_of_contact])
+
+    def collapse_message(self, t_new: float, h: float) -> str:
+        """Why a step of size ``h`` is a collapse; for a run so short that its steps are short, what to change."""
+        size, limit = distinct_texts(h, self.limits.min_step)
+        message = f"t={t_new:.9g} s: step size {size} s below {limit} s ([limits] min_step)"
+        span = self.t_final - self.t0
+        if h >= SHORT_SPAN_STEP_FRACTION * span:
+            message += f"; the run spans only {span:.3g} s, so its steps are short: lower [limits] min_step for a run this short"
+        return message
 
     def check_pace(self, t_new: float) -> None:
         """Every ``STALL_WINDOW`` steps: the steps taken plus those the last window's pace needs to the end.
@@ -314,7 +370,7 @@ class EventDrivenIntegrator:
         found = []
         if not (crossing.size or hidden.size):
             return found
-        dense = self.dense_output()
+        dense = self.onset_dense_output()
         for k in crossing:
             found.append((first_contact_time(self._penetration_on(dense, k), step.t_old, step.t_new), k))
         for k in hidden:
@@ -327,18 +383,22 @@ class EventDrivenIntegrator:
         return found
 
     def restart_at_onset(self, step: _Step, found: list[tuple[float, int]]) -> None:
-        """Cut the step at the earliest onset: records up to it, the onset rates, the restart state."""
+        """Cut the step at the earliest onset: records up to it, the onset rates, the restart state.
+
+        The restart state is checked as an accepted step's end is (it is where the run goes on from).
+        """
         t_event = min(found)[0]
-        dense = self.dense
+        dense = self.onset_dense_output()
         y_event = self.system.normalise(dense(t_event))
         at_event = self.probe(t_event, y_event)
         pen_e, rate_e = at_event.penetration, at_event.penetration_rate
+        self.check_failures(t_event, at_event, bool(np.any(pen_e > self.system.penetration_bounds)))
         self.locate_peaks(dense, step.t_old, t_event, rate_e)
         # every candidate touching at the event starts its impact now (simultaneous
         # onsets are common: a tilting bearing meets both flanges at once)
         starting = sorted({k for t_k, k in found if t_k <= t_event} | set(np.flatnonzero((self.pen <= 0) & (pen_e >= 0))))
         for k in starting:
-            self.onset[k] = max(rate_e[k], ONSET_RATE_FLOOR)
+            self.onset[k] = onset_rate(rate_e[k])
             self.events.append((t_event, int(k), "onset", float(self.onset[k])))
         self.record_outputs(dense, step.t_old, t_event)
         self.record(t_event, y_event, R.RECORD_ONSET, forces=at_event.normal_force)
@@ -357,22 +417,23 @@ class EventDrivenIntegrator:
         self.t, self.y = t_event, y_event
         self.pen, self.rate = pen_e, rate_e
 
-    def check_failures(self, step: _Step, flags: int) -> None:
-        """Penetration beyond its physical bound, constraint drift, wall time."""
-        limits, t_new = self.limits, step.t_new
-        if flags & OVER_BOUND:
+    def check_failures(self, t: float, probe: ContactProbe, over_bound: bool) -> None:
+        """At a state the run goes on from (a step's end, a restart at an onset): penetration beyond its physical
+        bound (``over_bound``: some candidate's), constraint drift, wall time."""
+        limits = self.limits
+        if over_bound:
             bounds = self.system.penetration_bounds
-            pen_new = step.probe.penetration
-            k = np.flatnonzero(pen_new > bounds)[0]
+            pen = probe.penetration
+            k = np.flatnonzero(pen > bounds)[0]
             raise _Failure(
                 "penetration beyond physical bound",
-                f"t={t_new:.9g} s: penetration {pen_new[k]:.3e} m of contact candidate {k} exceeds "
+                f"t={t:.9g} s: penetration {pen[k]:.3e} m of contact candidate {k} exceeds "
                 f"{bounds[k]:.3e} m ({limits.penetration_ratio} x clearance)",
             )
-        if step.probe.residual > limits.max_residual:
-            raise _Failure("constraint drift", f"t={t_new:.9g} s: constraint residual {step.probe.residual:.3e} exceeds {limits.max_residual:.1e}")
+        if probe.residual > limits.max_residual:
+            raise _Failure("constraint drift", f"t={t:.9g} s: constraint residual {probe.residual:.3e} exceeds {limits.max_residual:.1e}")
         if time.perf_counter() - self.started_wall > limits.max_wall_time:
-            raise _Failure("wall time", f"t={t_new:.9g} s: wall time limit {limits.max_wall_time} s reached")
+            raise _Failure("wall time", f"t={t:.9g} s: wall time limit {limits.max_wall_time} s reached")
 
     def locate_peaks(self, dense, t_old: float, t_to: float, rate_to: np.ndarray) -> None:
         """Record the penetration maxima inside (t_old, t_to), and with each its candidate's force maximum."""
@@ -412,6 +473,22 @@ class EventDrivenIntegrator:
             self.dense = self.solver.dense_output()
             self.dense_calls += self.system.rhs_calls - before
         return self.dense
+
+    def onset_dense_output(self):
+        """The dense output the current step's contact onsets are located on and its restart state taken from.
+
+        A fixed-step method's step that crosses into a contact is accepted with
+        late stages in contact (:meth:`set_step_onset_rates`): the states before
+        the onset are taken as steps of the method from the step's start
+        (``restep_dense_output``, :class:`robot.integration.dense.RestepDense`),
+        out of contact and as accurate as the method. An adaptive method's
+        accepted step is accurate to its tolerance over the whole step: its own
+        dense output.
+        """
+        if self.onset_dense is None:
+            restep = getattr(self.solver, "restep_dense_output", None) if self.traits.fixed_step else None
+            self.onset_dense = self.dense_output() if restep is None else restep()
+        return self.onset_dense
 
     def probe(self, t: float, y: np.ndarray, onset: np.ndarray | None = None, residual: bool = True) -> ContactProbe:
         """The system's probe at an accepted (or located) state: a refused pose means the run has blown up."""

@@ -35,15 +35,16 @@ from robot.integration.records import Records
 from robot.integration.solvers import make_solver
 
 
-def derivative_or_inf(system, onset_rates: np.ndarray):
-    """``f(t, y)`` of ``system`` at fixed onset rates, answering ``inf`` where a contact law refuses the state.
+def derivative_or_refused(system, onset_rates: np.ndarray, refused: float = math.inf):
+    """``f(t, y)`` of ``system`` at fixed onset rates, answering ``refused`` (inf or NaN) where a contact law refuses the state.
 
     A trial stage of a too-large step can land in an absurd pose (e.g. a journal
     turned half round): a non-finite derivative makes the step's error estimate
     non-finite, so the solver rejects the step and shrinks it. Accepted states
     are still checked, and a real blow-up is reported. A ``ContactLawError`` (a
     user-defined law that raised or returned a value out of range) passes through:
-    the run stops on it, naming the law.
+    the run stops on it, naming the law. :func:`refused_stage_value` chooses
+    ``refused`` for a method.
     """
 
     def fun(t: float, y: np.ndarray) -> np.ndarray:
@@ -52,9 +53,25 @@ def derivative_or_inf(system, onset_rates: np.ndarray):
         except ContactLawError:
             raise  # a user-defined law broke its contract: no smaller step mends that
         except ContactError:
-            return np.full(system.size, np.inf)
+            return np.full(system.size, refused)
 
     return fun
+
+
+def refused_stage_value(traits: registry.IntegratorTraits) -> float:
+    """What a method's trial stage in a pose a contact law refuses is answered with: NaN if explicit, else inf.
+
+    Explicit Runge-Kutta methods combine the stages with weights of which some are
+    zero (RK45's ``B`` and ``E``, DOP853's ``E5``): ``inf * 0`` makes numpy print
+    "RuntimeWarning: invalid value encountered in dot" on runs that go on fine,
+    while NaN passes through quietly. Their error norm is NaN either way (the
+    zero weights turn inf into NaN) and scipy rejects the step with the same
+    step-size factor (``error_norm < 1`` is false, ``max(MIN_FACTOR, NaN)`` is
+    ``MIN_FACTOR`` as is ``max(MIN_FACTOR, inf ** -k)``). The implicit methods
+    keep inf: their Newton iterations and error tests (LSODA's in Fortran, CVODE's
+    in C) are relied on to reject it, and a NaN fails every comparison.
+    """
+    return math.nan if traits.explicit else math.inf
 
 
 class ForcePeaks:
@@ -114,8 +131,9 @@ class ForcePeaks:
         t_a, t_b = records.t[i_a], records.t[i_b]
         if self.replay_system is None:
             self.replay_system = self.system.replica()
-        fun = derivative_or_inf(self.replay_system, records.onset[i_a])
-        if not registry.traits(options.method).replayable:
+        traits = registry.traits(options.method)
+        fun = derivative_or_refused(self.replay_system, records.onset[i_a], refused_stage_value(traits))
+        if not traits.replayable:
             # a step that cannot be redone alone: the cubic Hermite interpolant of its two accepted end
             # states and their derivatives (two right-hand sides), on the method's own trajectory and as
             # accurate as its steps (error ~ h^4 max|y^(4)| / 384)

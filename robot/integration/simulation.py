@@ -35,7 +35,7 @@ from robot.dynamics import state_jacobian as SJ
 from robot.integration import methods as registry
 from robot.integration.event_loop import MAX_STALLED_RESTARTS, EventDrivenIntegrator  # noqa: F401 (re-exported)
 from robot.integration.events import all_finite, first_contact_time  # noqa: F401 (re-exported)
-from robot.integration.force_peaks import derivative_or_inf
+from robot.integration.force_peaks import derivative_or_refused
 from robot.integration.options import STRUCTURED, FailureLimits, SolverOptions  # noqa: F401 (re-exported)
 from robot.integration.records import (  # noqa: F401 (re-exported: the record kinds and the trajectory)
     FAILED,
@@ -102,7 +102,7 @@ class LagrangeSystem:
         except (ContactError, np.linalg.LinAlgError):
             # a contact law refused a perturbed input, or a factorisation failed: difference the
             # right-hand side instead, as the solver would (forward, sqrt(eps) steps)
-            fun = derivative_or_inf(self, onset)
+            fun = derivative_or_refused(self, onset)
             base = fun(t, y)
             if all_finite(base):
                 out[:] = SJ.finite_difference_jacobian(fun, t, y, relative_step=FORWARD_STEP, base=base)

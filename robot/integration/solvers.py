@@ -34,6 +34,7 @@ not expose it (reported as -1).
 
 from __future__ import annotations
 
+import copy
 import math
 from dataclasses import dataclass
 from typing import Callable
@@ -42,7 +43,7 @@ import numpy as np
 
 from robot.integration import cvode_direct
 from robot.integration import methods as registry
-from robot.integration.dense import HermiteDense
+from robot.integration.dense import HermiteDense, RestepDense
 from robot.integration.solver_base import DenseOutput, OdeSolver
 # the old trait tables, as live views of the registry (robot.integration.methods)
 from robot.integration.methods import FIXED_STEP_METHODS, JACOBIAN_METHODS, METHODS, STAGES, STRUCTURED_METHODS  # noqa: F401
@@ -84,22 +85,38 @@ class FixedStepRK4(OdeSolver):
         self.f = self.fun(self.t, self.y)
         self.y_old = None
         self.f_old = None
+        self.n_restep_calls = 0  # right-hand sides of the restep dense outputs (not step attempts)
 
     def _step_impl(self):
         h = min(self.h_fixed, abs(self.t_bound - self.t))
         t, y, f = self.t, self.y, self.f
-        k1 = f
-        k2 = self.fun(t + h / 2, y + h / 2 * k1)
-        k3 = self.fun(t + h / 2, y + h / 2 * k2)
-        k4 = self.fun(t + h, y + h * k3)
         self.y_old, self.f_old, self.t_old_value = y, f, t
-        self.y = y + h / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
+        self.y = self._rk4_step(t, y, f, h)
         self.t = t + h
         self.f = self.fun(self.t, self.y)
         return True, None
 
+    def _rk4_step(self, t: float, y: np.ndarray, f: np.ndarray, h: float) -> np.ndarray:
+        """The state a step ``h`` after ``(t, y)``, ``f = fun(t, y)`` (three right-hand sides)."""
+        k2 = self.fun(t + h / 2, y + h / 2 * f)
+        k3 = self.fun(t + h / 2, y + h / 2 * k2)
+        k4 = self.fun(t + h, y + h * k3)
+        return y + h / 6 * (f + 2 * k2 + 2 * k3 + k4)
+
     def _dense_output_impl(self):
         return HermiteDense(self.t_old_value, self.t, self.y_old, self.f_old, self.y, self.f)
+
+    def restep_dense_output(self) -> RestepDense:
+        """The last step's states as RK4 steps from its start (:class:`~robot.integration.dense.RestepDense`)."""
+        t_old, y_old, f_old = self.t_old_value, self.y_old, self.f_old
+
+        def restep(h: float) -> np.ndarray:
+            calls = self.nfev
+            y = self._rk4_step(t_old, y_old, f_old, h)
+            self.n_restep_calls += self.nfev - calls
+            return y
+
+        return RestepDense(t_old, self.t, y_old, restep)
 
     step_size = _FIXED_STEP_SIZE
 
@@ -141,6 +158,8 @@ class GeneralizedAlpha(OdeSolver):
 
     max_iterations = 8
     max_refreshes = 3
+    #: the registered method's name, in the failure messages (:class:`Newmark` is the same class with rho_inf = 1)
+    method_name = "GenAlpha"
 
     def __init__(
         self,
@@ -158,13 +177,13 @@ class GeneralizedAlpha(OdeSolver):
     ):
         super().__init__(fun, t0, y0, t_bound, vectorized)
         if structure is None:
-            raise ValueError("the generalized-alpha method needs the second-order structure of the state (nq, nv, integrate)")
+            raise ValueError(f"the {self.method_name} method (generalized-alpha) needs the second-order structure of the state (nq, nv, integrate)")
         if not 0.0 <= rho_inf <= 1.0:
             raise ValueError(f"rho_inf={rho_inf!r} must be in [0, 1]")
         self.h_fixed = _fixed_step(first_step, t0, t_bound)
         self.structure = structure
         self.rtol, self.atol = float(rtol), float(atol)
-        rho = float(rho_inf)
+        rho = self.rho_inf = float(rho_inf)
         self.alpha_m = (2.0 * rho - 1.0) / (rho + 1.0)
         self.alpha_f = rho / (rho + 1.0)
         self.gamma = 0.5 + self.alpha_f - self.alpha_m
@@ -179,6 +198,8 @@ class GeneralizedAlpha(OdeSolver):
         self.failure_cause = None
         self.newton_tol = max(10.0 * EPS / self.rtol, min(0.03, math.sqrt(self.rtol)))
         self.y_old = self.f_old = None
+        self.step_start = None  # (t, y, f, a, x) at the start of the last step
+        self.n_restep_calls = 0  # right-hand sides of the restep dense outputs (not step attempts)
 
     step_size = _FIXED_STEP_SIZE
 
@@ -269,6 +290,19 @@ class GeneralizedAlpha(OdeSolver):
     def _step_impl(self):
         h = min(self.h_fixed, abs(self.t_bound - self.t))
         t_new = self.t + h
+        result = self._solve(t_new, h)
+        if result is None:
+            self.failure_cause = "Newton divergence"
+            return False, self._divergence_message(t_new, h)
+        y_new, f_new, acc_new, x_new = result
+        self.step_start = (self.t, self.y, self.f, self.acc, self.pseudo)
+        self.y_old, self.f_old, self.t_old_value = self.y, self.f, self.t
+        self.y, self.f, self.t = y_new, f_new, t_new
+        self.acc, self.pseudo = acc_new, x_new
+        return True, None
+
+    def _solve(self, t_new: float, h: float):
+        """(y+, f+, a+, x+) of the step ``h`` from the current state, or None if the iterations fail even with fresh matrices."""
         self._last = None
         result = self._newton(t_new, h)
         for _ in range(self.max_refreshes):
@@ -282,24 +316,45 @@ class GeneralizedAlpha(OdeSolver):
             if not self._refresh_matrix(t_new if self._last is not None else self.t, y_at, f_at, h):
                 break
             result = self._newton(t_new, h)
-        if result is None:
-            self.failure_cause = "Newton divergence"
-            return False, (
-                f"generalized-alpha: the Newton iterations did not converge at t={t_new:.9g} s with the fixed step "
-                f"h={h:.3e} s (step too large for the dynamics)"
-            )
-        y_new, f_new, acc_new, x_new = result
-        self.y_old, self.f_old, self.t_old_value = self.y, self.f, self.t
-        self.y, self.f, self.t = y_new, f_new, t_new
-        self.acc, self.pseudo = acc_new, x_new
-        return True, None
+        return result
+
+    def _divergence_message(self, t_new: float, h: float) -> str:
+        return (
+            f"{self.method_name} (generalized-alpha, rho_inf = {self.rho_inf:g}): the Newton iterations did not converge at "
+            f"t={t_new:.9g} s with the fixed step h={h:.3e} s (step too large for the dynamics)"
+        )
 
     def _dense_output_impl(self):
         return HermiteDense(self.t_old_value, self.t, self.y_old, self.f_old, self.y, self.f)
 
+    def restep_dense_output(self) -> RestepDense:
+        """The last step's states as steps of the method from its start (:class:`~robot.integration.dense.RestepDense`).
+
+        Each from the step's start state with its history (the pseudo-acceleration
+        ``x``), on a copy of the solver: the copy's iteration matrix is refreshed
+        for the shorter steps when needed, and the solver goes on unchanged.
+        """
+        start = self.step_start
+        t_old = start[0]
+        replica = copy.copy(self)
+
+        def restep(h: float) -> np.ndarray:
+            replica.t, replica.y, replica.f, replica.acc, replica.pseudo = start
+            calls, jacobians = self.nfev, replica.njev  # the copy calls the solver's counted fun
+            result = replica._solve(t_old + h, h)
+            self.n_restep_calls += self.nfev - calls
+            self.njev += replica.njev - jacobians
+            if result is None:
+                raise RuntimeError(f"{self._divergence_message(t_old + h, h)}, restepping from t={t_old:.9g} s to locate a contact onset")
+            return result[0]
+
+        return RestepDense(t_old, self.t, start[1], restep)
+
 
 class Newmark(GeneralizedAlpha):
     """Generalized-alpha with ``rho_inf = 1``: the trapezoidal rule (Newmark average acceleration)."""
+
+    method_name = "Newmark"
 
     def __init__(self, *args, **kwargs):
         kwargs["rho_inf"] = 1.0
