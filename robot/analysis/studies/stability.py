@@ -1,24 +1,43 @@
 """Where methods fail: failure boundaries, each failure reported with its cause.
 
-Three maps (``scripts/work_precision.py`` runs them, ``docs/work-precision.md``
+Three maps (``clearance work-precision`` runs them, ``docs/work-precision.md``
 reports them):
 
 1. **step size against contact stiffness** (fixed-step methods, and the mean
-   step an explicit variable-step method is held to): the contact stiffness of
-   every clearance joint is scaled through the material's Young's modulus (every
-   stiffness of the contact layer is proportional to E*); each (h, scale) run
-   ends ``ok`` or with its cause (penetration beyond the physical bound,
-   non-finite state, Newton divergence, ...);
+   step an explicit variable-step method is held to): every contact stiffness
+   of the scene is scaled by the same factor, the Young's modulus of every
+   material (each stiffness a contact law derives from its materials is
+   proportional to E*) and every stiffness a ``[[clearance]]`` table gives
+   explicitly (``stiffness``, ``radial_stiffness``, ...); checked on the laws'
+   parameters, and a scene whose stiffness does not follow them is refused
+   before any run (:func:`scaled_stiffness`);
 2. **Baumgarte gains** (alpha, beta grid): max constraint drift, cost and
-   blow-up, for an adaptive method and for fixed-step methods;
+   blow-up, for adaptive and for fixed-step methods;
 3. **hidden contact onsets**: variable-step methods at loose tolerances, with
    and without the guard that scans each step for a contact starting and ending
    inside it (``SolverOptions.hidden_contacts``): contact onsets found, onsets
    found only by the guard, how deep a step ran into contact before being cut
    back to the onset (relative to the clearance), failures.
 
+A cell of maps 1 and 2 says what a user needs to know of the run (``result``):
+
+* the failure cause, if it failed (penetration beyond the physical bound,
+  non-finite state, Newton divergence, constraint drift, ...);
+* ``inaccurate`` (:data:`INACCURATE`): it finished, but a measure of
+  :data:`THRESHOLDS` is beyond its threshold against a tight reference run of
+  the same scene over the same horizon (``inaccurate_by`` names them; the
+  measures are in ``errors``);
+* ``accurate`` (:data:`OK`): it finished and every measure is within its threshold;
+* ``no reference`` (:data:`UNCHECKED`): it finished, but the reference run
+  failed, so its accuracy is unknown.
+
+The reference (:func:`robot.analysis.studies.work_precision.reference`) is
+DOP853 at rtol 1e-11 checked against rtol 1e-10: pointwise measures are taken
+on the output grid (:data:`OUTPUT_STEP`) of the window where the two agree to
+1e-8 m. The stiffness map's boundary is the largest *accurate* step.
+
 Every run goes through :func:`robot.integration.simulation.integrate`, which never raises on
-divergence: the maps record ``status`` and ``cause``. A map stopped by the user
+divergence: the maps record ``result`` and ``message``. A map stopped by the user
 (Ctrl-C, or ``stop()`` true between runs) raises
 :class:`robot.analysis.studies.common.StudyStopped` carrying the map
 filled so far.
@@ -34,16 +53,151 @@ from typing import Callable
 
 import numpy as np
 
+from clearance_contact import ContactError, joint_type
 from robot.dynamics.equations import Baumgarte
+from robot.errors import SceneError
 from robot.run import Run, build_run
+from robot.scene.loader import Scene, load_scene
 from robot.integration.simulation import SolverOptions
-from robot.analysis.studies.common import run_or_stop, save_png, scene_variant, simulate
+from robot.analysis.studies import work_precision as wp
+from robot.analysis.studies.common import INTERRUPTED, Outcome, StudyStopped, run_or_stop, save_png, simulate
 
-OK = "ok"
+#: a run that finished with every measure of THRESHOLDS within its threshold
+OK = ACCURATE = "accurate"
+#: a run that finished without a failure cause, with a measure beyond its threshold
+INACCURATE = "inaccurate"
+#: a run that finished, but whose reference run failed: its accuracy is unknown
+UNCHECKED = "no reference"
+#: a run of the hidden-contact map that finished (that map measures the peak forces only)
+FINISHED = "finished"
+#: results that are not failures
+NOT_FAILED = (OK, INACCURATE, UNCHECKED, FINISHED, "ok")  # "ok": maps written before the classification
 
 
 def _cause(outcome) -> str:
-    return OK if outcome.success else (outcome.cause or "failed")
+    return FINISHED if outcome.success else (outcome.cause or "failed")
+
+
+# --------------------------------------------------------------------------------------
+# classification of a finished run against a tight reference
+# --------------------------------------------------------------------------------------
+
+#: the thresholds a finished map cell is checked against (docs/work-precision.md, "Where methods fail"):
+#: the engineering accuracy of the work-precision study (end effector, peak contact forces, drift) and,
+#: since a map cell must say whether its forces can be used, the driving forces and the energy balance
+THRESHOLDS = {
+    "ee": wp.EE_TARGET,  # m: max |p_ee - p_ee,ref| on the output grid of the comparable window
+    "driving": 1e-2,  # max |F - F_ref| / max |F_ref| over the actuators, same grid and window
+    "peak_force": wp.PEAK_TARGET,  # max over clearance joints of |peak - peak_ref| / peak_ref over [0, T]
+    "energy_relative": 1e-2,  # the run's max |Delta(T + V) - W| (J) over the reference's max |W_act|, [0, T]
+    "drift": wp.DRIFT_TARGET,  # m: the run's own max |Phi| over [0, T]
+}
+#: what each measure is called in messages and figures (and its one-letter code in the stiffness figure)
+MEASURES = {
+    "ee": ("end-effector position", "x"),
+    "driving": ("driving forces", "F"),
+    "peak_force": ("peak contact force", "P"),
+    "energy_relative": ("energy balance", "E"),
+    "drift": ("constraint drift", "d"),
+}
+#: the common output grid of the runs and their reference (s; the work-precision study's default)
+OUTPUT_STEP = 1e-4
+
+
+def _relative(value: float, ref: float) -> float:
+    return abs(value - ref) / abs(ref) if ref else abs(value)
+
+
+def accuracy(outcome: Outcome, ref: wp.Reference) -> dict:
+    """The measures of :data:`THRESHOLDS` of a finished run against ``ref`` (same scene, horizon and output grid).
+
+    ``None``: the measure does not apply to the scene (no actuator, no clearance joint, no actuator
+    work); NaN: it applies but could not be taken (counted as beyond its threshold). Also, for the
+    record: ``driving_n`` (the driving-force error in N), ``peak_force_by_joint``, ``impulse`` and
+    ``energy`` (J).
+    """
+    r = ref.outcome
+    out: dict = {"drift": outcome.max_residual, "energy": outcome.energy_error}
+    out["energy_relative"] = outcome.energy_error / r.actuator_work_scale if r.actuator_work_scale > 0 else None
+    n = len(r.grid_t)
+    same_grid = outcome.grid_t is not None and len(outcome.grid_t) == n and np.allclose(outcome.grid_t, r.grid_t)
+    window = r.grid_t <= ref.window + 1e-12
+    out["ee"] = out["driving"] = out["driving_n"] = math.nan
+    if same_grid and window.any():
+        out["ee"] = float(np.max(np.linalg.norm(outcome.grid_ee[window] - r.grid_ee[window], axis=1)))
+        scale = float(np.max(np.abs(r.grid_force[window]))) if r.grid_force[window].size else 0.0
+        if scale > 0:
+            out["driving_n"] = float(np.max(np.abs(outcome.grid_force[window] - r.grid_force[window])))
+            out["driving"] = out["driving_n"] / scale
+        else:
+            out["driving"] = out["driving_n"] = None
+    if r.peaks:
+        by_joint = {j: _relative(outcome.peaks.get(j, math.nan), p) for j, p in r.peaks.items()}
+        out["peak_force"] = max(by_joint.values())
+        out["peak_force_by_joint"] = by_joint
+        out["impulse"] = max(_relative(outcome.impulses.get(j, math.nan), p) for j, p in r.impulses.items())
+    else:
+        out["peak_force"] = out["impulse"] = None
+    return out
+
+
+def beyond_thresholds(errors: dict) -> list[str]:
+    """The measures of :data:`THRESHOLDS` beyond their threshold (NaN counts as beyond; None: not applicable)."""
+    return [key for key, limit in THRESHOLDS.items() if errors.get(key) is not None and not errors[key] <= limit]
+
+
+def classify(outcome: Outcome, ref: wp.Reference | None) -> dict:
+    """``result`` (:data:`OK`, :data:`INACCURATE`, :data:`UNCHECKED` or the failure cause), ``errors``, ``inaccurate_by``."""
+    if not outcome.success:
+        return {"result": outcome.cause or "failed", "errors": None, "inaccurate_by": []}
+    if ref is None:
+        return {"result": UNCHECKED, "errors": None, "inaccurate_by": []}
+    errors = accuracy(outcome, ref)
+    beyond = beyond_thresholds(errors)
+    return {"result": INACCURATE if beyond else OK, "errors": errors, "inaccurate_by": beyond}
+
+
+def describe(cell: dict) -> str:
+    """One line for a classified cell: ``accurate``, ``inaccurate: driving forces 77 %, ...`` or the cause."""
+    if cell["result"] != INACCURATE:
+        return cell["result"]
+    parts = []
+    for key in cell["inaccurate_by"]:
+        value = cell["errors"].get(key)
+        parts.append(f"{MEASURES[key][0]} {_amount(key, value)} (> {_amount(key, THRESHOLDS[key])})")
+    return f"{INACCURATE}: " + ", ".join(parts)
+
+
+def _amount(key: str, value: float | None) -> str:
+    """A measure's value with its unit: m for lengths, % for the relative ones."""
+    if value is None or not math.isfinite(value):
+        return "not measured" if value is None or math.isnan(value) else str(value)
+    return f"{value:.2g} m" if key in ("ee", "drift") else f"{100 * value:.3g} %"
+
+
+def _reference(run: Run, t_end: float, label: str, finished: dict, stop) -> tuple[wp.Reference | None, dict]:
+    """The tight reference of ``run`` over [0, t_end] and its summary (None and why, if the reference run failed).
+
+    A stop of the user while it runs stops the map (:class:`StudyStopped` carrying ``finished``).
+    """
+    try:
+        ref = wp.reference(run, t_end, OUTPUT_STEP, stop=stop)
+    except StudyStopped as stopped:
+        if stopped.reason == INTERRUPTED:
+            raise StudyStopped(f"{label}: {stopped}", finished, stopped.stopped_run) from None
+        return None, {"failed": str(stopped), "runs": stopped.finished}
+    summary = {
+        "method": wp.REFERENCE.method,
+        "rtol": wp.REFERENCE.rtol,
+        "check_rtol": wp.CHECK.rtol,
+        "comparable_window_s": ref.window,
+        "steps": ref.outcome.n_steps,
+        "cpu_time": ref.outcome.cpu_time + ref.check.cpu_time,
+        "peak_force": ref.outcome.peaks,
+        "driving_force_max": float(np.max(np.abs(ref.outcome.grid_force))) if ref.outcome.grid_force.size else None,
+        "actuator_work_max": ref.outcome.actuator_work_scale,
+    }
+    return ref, summary
 
 
 # --------------------------------------------------------------------------------------
@@ -63,71 +217,155 @@ def stiffness_map(
     progress=None,
     stop: Callable[[], bool] | None = None,
 ) -> dict:
-    """Outcome of every (method, h, stiffness scale) run, and the adaptive method's mean step per scale."""
-    base = build_run(scene)
-    # the shipped scenes' clearance joints are all of [materials.steel]: scale its Young's modulus
-    modulus = _steel_modulus(base)
-    out = {"scene": scene, "t_end": t_end, "scales": list(scales), "steps": list(steps), "methods": {}, "adaptive": {}}
+    """Outcome of every (method, h, stiffness scale) run, classified, and the adaptive method's mean step per scale.
+
+    Per scale: the scene with every contact stiffness scaled (:func:`scaled_stiffness`), a tight
+    reference of it over [0, t_end] (``reference``), then the cells, each classified against it
+    (:func:`classify`). ``boundary``: per method and scale the largest step that is accurate;
+    ``boundary_finished``: the largest that finished (accurate or not). ``folder``: not used (the
+    variants are the scene with ``overrides``, recorded in ``scaled``); kept for callers.
+    SceneError before any run if the scene's contact stiffness cannot be scaled.
+    """
+    base = load_scene(scene)
+    scaled = scaled_stiffness(base)  # refuses a scene whose stiffness the map cannot scale
+    out = {
+        "scene": scene, "t_end": t_end, "scales": list(scales), "steps": list(steps), "methods": {}, "adaptive": {},
+        "scaled": scaled, "output_step": OUTPUT_STEP, "thresholds": dict(THRESHOLDS), "reference": {},
+    }  # fmt: skip
     try:
         for scale in scales:
-            run = scene_variant(
-                scene,
-                f"[materials.steel]\nyoungs_modulus = {modulus * scale!r}\npoisson_ratio = {_steel_poisson(base)!r}\n",
-                folder,
-                name=f"{scene}_stiffness_{scale:g}",
-            )
-            _fixed_step_runs(out, run, scale, methods, steps, t_end, progress, stop)
-            _adaptive_run(out, run, scale, adaptive, adaptive_rtol, t_end, progress, stop)
+            variant = base.with_changes({**stiffness_overrides(scaled, scale), "name": f"{base.name}_stiffness_x{scale:g}"})
+            run = build_run(variant)
+            ref, out["reference"][repr(scale)] = _reference(run, t_end, f"stiffness x{scale:g} reference", out, stop)
+            if progress:
+                what = out["reference"][repr(scale)]
+                progress(f"stiffness x{scale:g} reference: " + (f"failed ({what['failed']})" if ref is None else f"comparable window {ref.window:.3g} s"))
+            _fixed_step_runs(out, run, ref, scale, methods, steps, t_end, progress, stop)
+            _adaptive_run(out, run, ref, scale, adaptive, adaptive_rtol, t_end, progress, stop)
     finally:  # a stopped map keeps the boundaries of what it ran
         out["boundary"] = {
-            method: {repr(scale): _largest_ok([r for r in rows if r["scale"] == scale]) for scale in scales} for method, rows in out["methods"].items()
+            method: {repr(scale): _largest(rows, scale, (OK,)) for scale in scales} for method, rows in out["methods"].items()
+        }
+        out["boundary_finished"] = {
+            method: {repr(scale): _largest(rows, scale, (OK, INACCURATE, UNCHECKED)) for scale in scales} for method, rows in out["methods"].items()
         }
     return out
 
 
-def _fixed_step_runs(out: dict, run: Run, scale: float, methods, steps, t_end: float, progress, stop) -> None:
+def _fixed_step_runs(out: dict, run: Run, ref, scale: float, methods, steps, t_end: float, progress, stop) -> None:
     for method in methods:
         rows = out["methods"].setdefault(method, [])
         for h in steps:
             label = f"stiffness x{scale:g} {method} h={h:g}"
-            options = SolverOptions(method, rtol=1e-8, atol=1e-10, first_step=h)
-            outcome = run_or_stop(partial(simulate, run, options, t_end, outputs=False), label, out, stop)
-            rows.append({"scale": scale, "h": h, "result": _cause(outcome), "message": outcome.message, "cpu_time": outcome.cpu_time, "steps": outcome.n_steps})
+            options = SolverOptions(method, rtol=1e-8, atol=1e-10, first_step=h, output_step=OUTPUT_STEP)
+            outcome = run_or_stop(partial(simulate, run, options, t_end, label=label), label, out, stop)
+            cell = classify(outcome, ref)
+            rows.append({"scale": scale, "h": h, **cell, "message": outcome.message, "cpu_time": outcome.cpu_time, "steps": outcome.n_steps})
             if progress:
-                progress(f"{label}: {_cause(outcome)}")
+                progress(f"{label}: {describe(cell)}")
 
 
-def _adaptive_run(out: dict, run: Run, scale: float, adaptive: str, adaptive_rtol: float, t_end: float, progress, stop) -> None:
-    options = SolverOptions(adaptive, rtol=adaptive_rtol, atol=adaptive_rtol * 1e-2, max_step=1e-3)
-    outcome = run_or_stop(partial(simulate, run, options, t_end, outputs=False), f"stiffness x{scale:g} {adaptive}", out, stop)
+def _adaptive_run(out: dict, run: Run, ref, scale: float, adaptive: str, adaptive_rtol: float, t_end: float, progress, stop) -> None:
+    options = SolverOptions(adaptive, rtol=adaptive_rtol, atol=adaptive_rtol * 1e-2, max_step=1e-3, output_step=OUTPUT_STEP)
+    label = f"stiffness x{scale:g} {adaptive}"
+    outcome = run_or_stop(partial(simulate, run, options, t_end, label=label), label, out, stop)
+    cell = classify(outcome, ref)
     out["adaptive"][repr(scale)] = {
         "method": adaptive,
         "rtol": adaptive_rtol,
-        "result": _cause(outcome),
+        **cell,
         "steps": outcome.n_steps,
         "mean_step": outcome.t_reached / max(outcome.n_steps, 1),
         "cpu_time": outcome.cpu_time,
     }
     if progress:
-        progress(f"stiffness x{scale:g} {adaptive}: {outcome.n_steps} steps")
+        progress(f"{label}: {outcome.n_steps} steps, {describe(cell)}")
 
 
-def _largest_ok(rows) -> float | None:
-    """Largest step size that succeeded (None if none did)."""
-    ok = [r["h"] for r in rows if r["result"] == OK]
-    return max(ok) if ok else None
+def _largest(rows, scale: float, results) -> float | None:
+    """Largest step size at ``scale`` whose result is one of ``results`` (None if none is)."""
+    hs = [r["h"] for r in rows if r["scale"] == scale and r["result"] in results]
+    return max(hs) if hs else None
 
 
-def _steel_modulus(run: Run) -> float:
-    law = run.dynamics.contacts[0].law
-    material = getattr(law, "ball_material", None) or getattr(law, "journal_material")
-    return float(material.youngs_modulus)
+def scaled_stiffness(scene: Scene) -> dict:
+    """What the stiffness map scales in ``scene``, with the nominal values.
+
+    ``materials``: the Young's modulus of every material of the scene (every stiffness a
+    contact law derives from its materials is proportional to E*: Hertz, line and
+    flat-punch stiffness, the Johnson and Pereira laws, a translational joint's rounded
+    corners); ``keys``: per clearance joint, every stiffness its ``[[clearance]]`` table
+    gives explicitly (its type's scene keys ending in ``stiffness``: ``stiffness``,
+    ``radial_stiffness``, ``axial_stiffness``, ``point_stiffness``), which the laws use
+    instead of the materials'. Checked on the laws themselves (:func:`_probe_forces`):
+    with all of these doubled, every elastic normal force of every joint at a set of
+    penetrating poses must double; else :class:`SceneError` naming the joint and its keys
+    (e.g. a registered joint type whose stiffness follows a key of another name).
+    """
+    document = scene.document
+    if not document.get("clearance"):
+        raise SceneError(f"scene {scene.name!r} has no clearance joint: the stiffness map has no contact stiffness to scale", key="clearance", value=None)
+    materials = {name: float(table["youngs_modulus"]) for name, table in (document.get("materials") or {}).items()}
+    keys: dict[str, dict[str, float]] = {}
+    for entry in document["clearance"]:
+        kind = joint_type(entry["type"])
+        keys[entry["joint"]] = {k: float(entry[k]) for k in kind.SCENE_KEYS if k.endswith("stiffness") and k in entry}
+    scaled = {"materials": materials, "keys": keys}
+    doubled = scene.with_changes(stiffness_overrides(scaled, 2.0))
+    nominal = {c.joint: c for c in scene.clearances}
+    for spec in doubled.clearances:
+        problem = _scaling_problem(_probe_forces(nominal[spec.joint].law), _probe_forces(spec.law))
+        if problem:
+            entry = next(e for e in document["clearance"] if e["joint"] == spec.joint)
+            kind = joint_type(spec.kind)
+            others = [k for k in kind.SCENE_KEYS if k in entry and k not in keys[spec.joint] and k not in kind.GEOMETRY_KEYS and k not in kind.NAME_KEYS]
+            raise SceneError(
+                f"scene {scene.name!r}: the stiffness map cannot scale the contact stiffness of clearance joint {spec.joint!r} "
+                f"(type {spec.kind!r}): with the Young's moduli ({', '.join(materials) or 'none'}) and its keys ending in "
+                f"'stiffness' ({', '.join(keys[spec.joint]) or 'none given'}) doubled, {problem}; its other numeric keys: "
+                f"{', '.join(f'{k} = {entry[k]!r}' for k in others) or 'none'}. Map a scene whose contact stiffness follows "
+                "the materials or a '*stiffness' key",
+                key=f"clearance.{spec.joint}", value=spec.kind,
+            )  # fmt: skip
+    return scaled
 
 
-def _steel_poisson(run: Run) -> float:
-    law = run.dynamics.contacts[0].law
-    material = getattr(law, "ball_material", None) or getattr(law, "journal_material")
-    return float(material.poisson_ratio)
+def _probe_forces(law) -> np.ndarray:
+    """Elastic normal forces of ``law`` at penetrating poses: the inner element moved by 1.01 x each candidate
+    clearance along each axis of the outer element (both ways), at rest (no damping, no friction); NaN where
+    the law refuses the pose."""
+    rotation, origin, at_rest = np.eye(3), np.zeros(3), np.zeros(6)
+    rates = np.zeros(law.N_CANDIDATES)
+    forces = []
+    for clearance in sorted(set(np.asarray(law.candidate_clearances(), float).tolist())):
+        for axis in range(3):
+            for sign in (1.0, -1.0):
+                position = np.zeros(3)
+                position[axis] = sign * 1.01 * clearance
+                try:
+                    forces.append(np.array(law.evaluate(rotation, origin, at_rest, rotation, position, at_rest, rates).normal_force, float))
+                except ContactError:
+                    forces.append(np.full(law.N_CANDIDATES, np.nan))
+    return np.concatenate(forces) if forces else np.zeros(0)
+
+
+def _scaling_problem(nominal: np.ndarray, doubled: np.ndarray) -> str | None:
+    """Why the probe forces of a law with its stiffness doubled are not twice the nominal ones (None if they are)."""
+    touching = np.isfinite(nominal) & (nominal > 0)
+    if not touching.any():
+        return "no probe pose put it in contact, so the map cannot check that its forces scale"
+    ratio = doubled[touching] / nominal[touching]
+    if not np.allclose(ratio, 2.0, rtol=1e-9, atol=0.0):
+        return f"its contact forces at fixed penetrations changed by a factor {np.nanmin(ratio):.6g} to {np.nanmax(ratio):.6g}, not 2"
+    return None
+
+
+def stiffness_overrides(scaled: dict, scale: float) -> dict:
+    """Scene overrides (key paths) that scale every contact stiffness of :func:`scaled_stiffness` by ``scale``."""
+    overrides = {f"materials.{name}.youngs_modulus": modulus * scale for name, modulus in scaled["materials"].items()}
+    for joint, keys in scaled["keys"].items():
+        overrides |= {f"clearance.{joint}.{key}": value * scale for key, value in keys.items()}
+    return overrides
 
 
 # --------------------------------------------------------------------------------------
@@ -146,25 +384,35 @@ def baumgarte_map(
     progress=None,
     stop: Callable[[], bool] | None = None,
 ) -> dict:
-    """Max drift, cost and outcome for every (alpha, beta) and solver case (a case's grid fills as it runs)."""
+    """Max drift, cost and class (:func:`classify`) for every (alpha, beta) and solver case (a case's grid fills as it runs).
+
+    The reference is a tight run of the scene with its own gains (``reference``): the exact
+    motion, and the exact driving forces, do not depend on the gains (the stabilisation
+    terms vanish with the constraint error), so one reference serves every cell.
+    """
     run = build_run(scene)
     limits = dataclasses.replace(run.scene.limits, max_residual=max_residual, max_wall_time=max_wall_time)
-    out = {"scene": scene, "t_end": t_end, "alphas": list(alphas), "betas": list(betas), "max_residual_limit": max_residual, "cases": []}
+    out = {
+        "scene": scene, "t_end": t_end, "alphas": list(alphas), "betas": list(betas), "max_residual_limit": max_residual,
+        "output_step": OUTPUT_STEP, "thresholds": dict(THRESHOLDS), "cases": [],
+    }  # fmt: skip
+    ref, out["reference"] = _reference(run, t_end, "baumgarte reference", out, stop)
     for method, rtol, h in cases:
-        options = SolverOptions(method, rtol=rtol or 1e-8, atol=(rtol or 1e-8) * 1e-2, max_step=1e-2, first_step=h)
+        options = SolverOptions(method, rtol=rtol or 1e-8, atol=(rtol or 1e-8) * 1e-2, max_step=1e-2, first_step=h, output_step=OUTPUT_STEP)
         grid: list[dict] = []
         out["cases"].append({"method": method, "rtol": rtol, "h": h, "grid": grid})
         for alpha in alphas:
             for beta in betas:
                 dynamics = dataclasses.replace(run.dynamics, baumgarte=Baumgarte(alpha, beta))
                 label = f"baumgarte {method} rtol={rtol} h={h} alpha={alpha:g} beta={beta:g}"
-                outcome = run_or_stop(partial(simulate, run, options, t_end, dynamics=dynamics, limits=limits), label, out, stop)
+                outcome = run_or_stop(partial(simulate, run, options, t_end, label=label, dynamics=dynamics, limits=limits), label, out, stop)
+                cell = classify(outcome, ref)
                 drift = outcome.max_residual
                 grid.append(
                     {
                         "alpha": alpha,
                         "beta": beta,
-                        "result": _cause(outcome),
+                        **cell,
                         "message": outcome.message,
                         "max_residual": drift,
                         "steps": outcome.n_steps,
@@ -174,7 +422,7 @@ def baumgarte_map(
                     }
                 )
                 if progress:
-                    progress(f"{label}: {_cause(outcome)} drift {drift:.2e}")
+                    progress(f"{label}: {describe(cell)}, drift {drift:.2e}")
     return out
 
 
@@ -194,7 +442,13 @@ def hidden_contact_map(
     progress=None,
     stop: Callable[[], bool] | None = None,
 ) -> dict:
-    """Onsets, guard detections, overshoot and outcome per (method, tolerance, guard)."""
+    """Onsets, guard detections, overshoot and outcome per (method, tolerance, guard).
+
+    ``result``: :data:`FINISHED` or the failure cause. With ``reference_peaks`` (a tight run's
+    peak normal force per joint over the same horizon) a finished run also gets
+    ``peak_force_error`` and, beyond the peak-force threshold of :data:`THRESHOLDS`,
+    ``inaccurate_by = ["peak_force"]`` (this map measures no other error).
+    """
     clearance = min(_clearances(run))
     out = {"scene": run.scene.name, "t_end": t_end, "max_step": max_step, "clearance": clearance, "reference_onsets": reference_onsets, "runs": []}
     for method in methods:
@@ -216,7 +470,8 @@ def hidden_contact_map(
                     "cpu_time": outcome.cpu_time,
                 }
                 if reference_peaks and outcome.success:
-                    row["peak_force_error"] = max(abs(outcome.peaks[j] - p) / p for j, p in reference_peaks.items())
+                    row["peak_force_error"] = max(_relative(outcome.peaks.get(j, math.nan), p) for j, p in reference_peaks.items())
+                    row["inaccurate_by"] = beyond_thresholds({"peak_force": row["peak_force_error"]})
                 out["runs"].append(row)
                 if progress:
                     progress(
@@ -236,15 +491,61 @@ def _clearances(run: Run) -> list[float]:
 
 COLOURS = {
     OK: "#4caf50",
+    INACCURATE: "#ffe082",
+    UNCHECKED: "#ffffff",
+    FINISHED: "#ffffff",
+    "ok": "#ffffff",  # a map written before the classification: finished, accuracy not checked
     "penetration beyond physical bound": "#e53935",
     "non-finite state": "#8e24aa",
+    "unphysical pose": "#f06292",
     "Newton divergence": "#fb8c00",
     "constraint drift": "#1e88e5",
     "step size collapse": "#6d4c41",
-    "event chattering": "#fdd835",
+    "event chattering": "#00acc1",
     "wall time": "#757575",
     "solver error": "#000000",
 }
+#: the hatch that marks a finished run with a measure beyond its threshold
+INACCURATE_HATCH = "////"
+
+
+def _legend_label(result: str) -> str:
+    if result == OK:
+        return "accurate: finished, every measure within its threshold"
+    if result == INACCURATE:
+        return "inaccurate: finished, letters = measures beyond their thresholds"
+    if result in (UNCHECKED, FINISHED, "ok"):
+        return "finished, accuracy not checked" + (" (reference run failed)" if result == UNCHECKED else "")
+    return f"failed: {result}"
+
+
+def _codes(row: dict) -> str:
+    return "".join(MEASURES[key][1] for key in row.get("inaccurate_by") or () if key in MEASURES)
+
+
+def _thresholds_note(data: dict) -> str:
+    t = data.get("thresholds") or THRESHOLDS
+    return (
+        f"against DOP853 rtol 1e-11 over the same horizon: x end effector > {t['ee']:g} m, F driving forces > {100 * t['driving']:g} %, "
+        f"P peak contact force > {100 * t['peak_force']:g} %, E energy balance > {100 * t['energy_relative']:g} % of the actuator work, "
+        f"d drift > {t['drift']:g} m"
+    )
+
+
+def _class_handles(results) -> list:
+    from matplotlib.patches import Patch
+
+    order = [OK, INACCURATE, UNCHECKED, FINISHED, "ok"]
+    ordered = [r for r in order if r in results] + sorted(r for r in results if r not in order)
+    handles, seen = [], set()
+    for result in ordered:
+        label = _legend_label(result)
+        if label in seen:
+            continue
+        seen.add(label)
+        hatch = INACCURATE_HATCH if result == INACCURATE else None
+        handles.append(Patch(facecolor=COLOURS.get(result, "#000000"), edgecolor="k", hatch=hatch, linewidth=0.4, label=label))
+    return handles
 
 
 def plot_stiffness(data: dict, path) -> None:
@@ -252,42 +553,65 @@ def plot_stiffness(data: dict, path) -> None:
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
+    from matplotlib.lines import Line2D
 
     methods = list(data["methods"])
-    fig, axes = plt.subplots(1, len(methods) + 1, figsize=(5 * (len(methods) + 1), 4.6))
+    fig, axes = plt.subplots(1, len(methods) + 1, figsize=(5.2 * (len(methods) + 1), 5.2))
     scales = data["scales"]
-    seen = set()
+    results = set()
     for ax, method in zip(axes, methods):
         for row in data["methods"][method]:
-            colour = COLOURS.get(row["result"], "#000000")
-            label = row["result"] if row["result"] not in seen else None
-            seen.add(row["result"])
-            ax.scatter(row["scale"], row["h"], s=160, marker="s", color=colour, label=label, edgecolors="k", linewidths=0.4)
-        boundary = [(s, data["boundary"][method][repr(s)]) for s in scales if data["boundary"][method][repr(s)]]
-        if boundary:
-            ax.plot(*zip(*boundary), "k-", lw=1)
+            result = row["result"]
+            results.add(result)
+            hatch = INACCURATE_HATCH if result == INACCURATE else None
+            ax.scatter(row["scale"], row["h"], s=170, marker="s", color=COLOURS.get(result, "#000000"), hatch=hatch, edgecolors="k", linewidths=0.4)
+            if result == INACCURATE:
+                ax.annotate(_codes(row), (row["scale"], row["h"]), xytext=(8, -3), textcoords="offset points", fontsize=7)
+        for key, style in (("boundary", "k-"), ("boundary_finished", "k--")):
+            limits = (data.get(key) or {}).get(method, {})
+            line = [(s, limits[repr(s)]) for s in scales if limits.get(repr(s))]
+            if line:
+                ax.plot(*zip(*line), style, lw=1)
         ax.set_xscale("log")
         ax.set_yscale("log")
-        ax.set_xlabel("contact stiffness / nominal (Young's modulus scale)")
+        ax.margins(x=0.15, y=0.1)
+        ax.set_xlabel("contact stiffness / nominal")
         ax.set_ylabel("fixed step h (s)")
-        ax.set_title(f"{method}: outcome over [0, {data['t_end']:g}] s", fontsize=10)
+        ax.set_title(f"{method} over [0, {data['t_end']:g}] s", fontsize=10)
         ax.grid(True, which="both", alpha=0.3)
     ax = axes[-1]
     adaptive = data["adaptive"]
-    xs = [float(k) for k in adaptive]
-    ax.loglog(xs, [adaptive[k]["mean_step"] for k in adaptive], "o-", label=f"{next(iter(adaptive.values()))['method']} mean step")
-    if len(xs) > 1:
-        x0, y0 = xs[0], adaptive[repr(xs[0]) if repr(xs[0]) in adaptive else next(iter(adaptive))]["mean_step"]
-        ax.loglog(xs, [y0 * (x / x0) ** -0.5 for x in xs], "k:", label="slope -1/2 (h ~ 1/omega)")
+    if adaptive:
+        xs = [float(k) for k in adaptive]
+        ax.loglog(xs, [adaptive[k]["mean_step"] for k in adaptive], "-", color="0.4", label=f"{next(iter(adaptive.values()))['method']} mean step")
+        for k, entry in adaptive.items():
+            result = entry.get("result", "ok")
+            results.add(result)
+            hatch = INACCURATE_HATCH if result == INACCURATE else None
+            ax.scatter(float(k), entry["mean_step"], s=90, marker="o", color=COLOURS.get(result, "#000000"), hatch=hatch, edgecolors="k", linewidths=0.4, zorder=3)
+            if result == INACCURATE:
+                ax.annotate(_codes(entry), (float(k), entry["mean_step"]), xytext=(7, -3), textcoords="offset points", fontsize=7)
+        if len(xs) > 1:
+            x0, y0 = xs[0], next(iter(adaptive.values()))["mean_step"]
+            ax.loglog(xs, [y0 * (x / x0) ** -0.5 for x in xs], "k:", label="slope -1/2 (h ~ 1/omega of a linear contact)")
     ax.set_xlabel("contact stiffness / nominal")
     ax.set_ylabel("mean accepted step (s)")
-    ax.set_title("explicit adaptive method: step held by stiffness", fontsize=10)
+    what = next(iter(adaptive.values()), {})
+    ax.set_title(f"explicit adaptive method ({what.get('method', '')} rtol {what.get('rtol', math.nan):g}): mean accepted step", fontsize=10)
     ax.grid(True, which="both", alpha=0.3)
     ax.legend(fontsize=8)
-    handles, labels = axes[0].get_legend_handles_labels()
-    fig.legend(handles, labels, loc="lower center", ncol=len(labels), fontsize=8)
-    fig.suptitle(f"Step size against contact stiffness ({data['scene']}); line: largest step that succeeded", fontsize=10)
-    fig.tight_layout(rect=(0, 0.07, 1, 0.95))
+    handles = _class_handles(results) + [
+        Line2D([], [], color="k", lw=1, label="largest accurate step"),
+        Line2D([], [], color="k", lw=1, ls="--", label="largest step that finished"),
+    ]
+    fig.legend(handles=handles, loc="lower center", ncol=3, fontsize=8)
+    fig.suptitle(
+        f"Step size against contact stiffness ({data['scene']}; Young's moduli and explicit stiffness keys scaled): "
+        "failed (cause), finished but inaccurate, or accurate\n"
+        + _thresholds_note(data),
+        fontsize=9,
+    )
+    fig.tight_layout(rect=(0, 0.13, 1, 0.93))
     save_png(fig, path)
 
 
@@ -296,36 +620,42 @@ def plot_baumgarte(data: dict, path) -> None:
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
+    from matplotlib.patches import Rectangle
 
     cases = data["cases"]
     alphas, betas = data["alphas"], data["betas"]
-    fig, axes = plt.subplots(1, len(cases), figsize=(4.6 * len(cases), 4.6), squeeze=False)
+    fig, axes = plt.subplots(1, len(cases), figsize=(4.4 * len(cases), 4.9), squeeze=False)
+    results = set()
     for ax, case in zip(axes[0], cases):
-        image = np.full((len(alphas), len(betas)), np.nan)
         for row in case["grid"]:
             i, j = alphas.index(row["alpha"]), betas.index(row["beta"])
-            value = row["max_residual"]
-            image[i, j] = math.log10(max(value, 1e-16)) if np.isfinite(value) else 0.0
-        shown = ax.imshow(image, origin="lower", cmap="viridis", vmin=-16, vmax=0, aspect="auto")
-        for row in case["grid"]:
-            i, j = alphas.index(row["alpha"]), betas.index(row["beta"])
-            if row["result"] != OK:
-                ax.text(j, i, _short(row["result"]), ha="center", va="center", color="w", fontsize=7, fontweight="bold")
+            result = row["result"]
+            results.add(result)
+            hatch = INACCURATE_HATCH if result == INACCURATE else None
+            ax.add_patch(Rectangle((j - 0.5, i - 0.5), 1, 1, facecolor=COLOURS.get(result, "#000000"), edgecolor="k", hatch=hatch, linewidth=0.4))
+            if result in NOT_FAILED:
+                text = f"{_codes(row)}\n{row['steps']}" if result == INACCURATE else f"{row['steps']}"
+                colour = "k"
             else:
-                ax.text(j, i, f"{row['steps']}", ha="center", va="center", color="w", fontsize=6)
+                text, colour = _short(result), "w"
+            ax.text(j, i, text, ha="center", va="center", color=colour, fontsize=6.5, fontweight="bold" if result == INACCURATE else "normal",
+                    bbox=dict(facecolor="w", edgecolor="none", pad=0.5, alpha=0.8) if result == INACCURATE else None)  # fmt: skip
+        ax.set_xlim(-0.5, len(betas) - 0.5)
+        ax.set_ylim(-0.5, len(alphas) - 0.5)
         ax.set_xticks(range(len(betas)), [f"{b:g}" for b in betas])
         ax.set_yticks(range(len(alphas)), [f"{a:g}" for a in alphas])
         ax.set_xlabel("beta (1/s)")
         ax.set_ylabel("alpha (1/s)")
         what = f"rtol {case['rtol']:g}" if case["h"] is None else f"h = {case['h']:g} s"
         ax.set_title(f"{case['method']} {what}", fontsize=10)
-    fig.colorbar(shown, ax=axes[0].tolist(), label="log10 max |Phi| (m)")
+    fig.legend(handles=_class_handles(results), loc="lower center", ncol=3, fontsize=8)
     fig.suptitle(
-        f"Baumgarte gains against drift and blow-up ({data['scene']}, [0, {data['t_end']:g}] s); numbers: steps; "
-        f"labels: failure cause (drift limit {data['max_residual_limit']:g} m)",
-        fontsize=10,
+        f"Baumgarte gains ({data['scene']}, [0, {data['t_end']:g}] s): numbers: steps; labels: failure cause "
+        f"(drift limit {data['max_residual_limit']:g} m) or, hatched, the measures beyond their thresholds\n" + _thresholds_note(data),
+        fontsize=9,
     )
-    save_png(fig, path, bbox_inches="tight")
+    fig.tight_layout(rect=(0, 0.1, 1, 0.9))
+    save_png(fig, path)
 
 
 def _short(cause: str) -> str:
@@ -336,6 +666,7 @@ def _short(cause: str) -> str:
         "wall time": "slow",
         "Newton divergence": "Newton",
         "penetration beyond physical bound": "pen.",
+        "unphysical pose": "pose",
     }.get(cause, cause[:6])
 
 
@@ -363,13 +694,15 @@ def plot_hidden(data: dict, path) -> None:
             if errors:
                 axes[2].loglog(*zip(*errors), style, marker="o", color=cmap(i))
             for r in rows:
-                if r["result"] != OK:
+                if r["result"] not in NOT_FAILED:
                     axes[0].plot([r["rtol"]], [r["onsets"]], "x", color="k", markersize=9)
+    if axes[2].lines:
+        axes[2].axhline(THRESHOLDS["peak_force"], color="k", lw=0.8, ls=":")
     if data.get("reference_onsets"):
         axes[0].axhline(data["reference_onsets"], color="k", lw=0.8, ls=":", label="reference")
     axes[0].set_ylabel("contact onsets found")
     axes[1].set_ylabel("deepest step end past an onset / clearance")
-    axes[2].set_ylabel("peak contact force error (relative)")
+    axes[2].set_ylabel(f"peak contact force error (relative; dotted: {100 * THRESHOLDS['peak_force']:g} % threshold)")
     for ax in axes:
         ax.set_xlabel("rtol (atol = rtol/100)")
         ax.grid(True, which="both", alpha=0.3)

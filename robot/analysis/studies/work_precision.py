@@ -123,7 +123,7 @@ def errors(outcome: Outcome, ref: Reference) -> dict:
         ee = np.linalg.norm(outcome.grid_ee[:n][window] - r.grid_ee[:n][window], axis=1)
         force = np.abs(outcome.grid_force[:n][window] - r.grid_force[:n][window])
         out["ee"] = float(ee.max())
-        out["driving"] = float(force.max() / np.max(np.abs(r.grid_force[:n][window])))
+        out["driving"] = float(force.max() / np.max(np.abs(r.grid_force[:n][window]))) if force.size else math.nan  # no actuator
     else:
         out["ee"] = out["driving"] = math.nan
     complete = outcome.success and n == len(r.grid_t)
@@ -133,7 +133,7 @@ def errors(outcome: Outcome, ref: Reference) -> dict:
         out["impulse"] = max((_relative(outcome.impulses[j], r.impulses[j]) for j in r.impulses), default=0.0)
         rms = np.sqrt(np.mean(outcome.grid_force**2, axis=0))
         rms_ref = np.sqrt(np.mean(r.grid_force**2, axis=0))
-        out["driving_rms"] = float(np.max(np.abs(rms - rms_ref) / rms_ref))
+        out["driving_rms"] = float(np.max(np.abs(rms - rms_ref) / rms_ref)) if rms.size else math.nan
     else:
         out["peak_force"] = out["impulse"] = out["driving_rms"] = math.nan
         out["peak_force_by_joint"] = {}
