@@ -171,6 +171,47 @@ def calibrated_scene_file(folder: Path, name: str, extra: str = "") -> Path:
     return path
 
 
+#: a torque-driven four-bar with a bronze revolute clearance at the coupler's crank pin (tests/data):
+#: the journal meets the bore at t = 1.866 ms; ``{restitution}``, ``{solver}`` (the [solver] table's
+#: lines) and ``{extra}`` (more tables) are the tests' own
+FOUR_BAR_TORQUE_SCENE = """
+name = "{name}"
+mechanism = "{urdf}"
+end_effector = "rocker"
+duration = {duration}
+gravity = [0.0, -9.81, 0.0]
+[actuators]
+crank = {{ mode = "force", function = "constant", value = 3.0 }}
+[initial]
+velocities = {{ crank = 10.0 }}
+[solver]
+{solver}
+[materials.bronze]
+youngs_modulus = 1.1e11
+poisson_ratio = 0.34
+[[clearance]]
+joint = "coupler"
+type = "revolute"
+outer_on = "child"
+material = "bronze"
+journal_radius = 0.008
+radial_clearance = 2.0e-4
+bearing_outer_radius = 0.014
+bearing_length = 0.015
+axial_clearance = 2.0e-4
+restitution = {restitution}
+friction = {{ law = "none" }}
+{extra}
+"""
+
+
+def four_bar_torque_scene(path: Path, *, name: str, duration: float, solver: str, restitution: float, extra: str = "") -> Path:
+    """Write :data:`FOUR_BAR_TORQUE_SCENE` to ``path`` and return it."""
+    urdf = (Path(__file__).resolve().parent / "data" / "four_bar_torque_driven.urdf").as_posix()
+    path.write_text(FOUR_BAR_TORQUE_SCENE.format(name=name, urdf=urdf, duration=duration, solver=solver, restitution=restitution, extra=extra))
+    return path
+
+
 @pytest.fixture(scope="session")
 def kernel_library_dir() -> Path:
     """The session's kernel library folder (``library_folder()`` under this session's ``CLEARANCE_KERNEL_DIR``), built

@@ -18,7 +18,6 @@ from __future__ import annotations
 import math
 import re
 import warnings
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -32,48 +31,17 @@ from robot.integration.simulation import integrate
 from robot.integration.solvers import SecondOrderStructure, make_solver
 from robot.run import build_run, run_scene
 from robot.validation.event_loop import FunctionSystem
+from tests.conftest import four_bar_torque_scene
 
-DATA = Path(__file__).resolve().parent / "data"
 
-#: a torque-driven four-bar, bronze revolute clearance at the coupler's crank pin, damped impacts
-#: (restitution 0.8): the journal meets the bore at t = 1.866 ms
-SCENE = """
-name = "four_bar_torque_damped"
-mechanism = "{urdf}"
-end_effector = "rocker"
-duration = {duration}
-gravity = [0.0, -9.81, 0.0]
-[actuators]
-crank = {{ mode = "force", function = "constant", value = 3.0 }}
-[initial]
-velocities = {{ crank = 10.0 }}
-[solver]
-{solver}
-[materials.bronze]
-youngs_modulus = 1.1e11
-poisson_ratio = 0.34
-[[clearance]]
-joint = "coupler"
-type = "revolute"
-outer_on = "child"
-material = "bronze"
-journal_radius = 0.008
-radial_clearance = 2.0e-4
-bearing_outer_radius = 0.014
-bearing_length = 0.015
-axial_clearance = 2.0e-4
-restitution = 0.8
-friction = {{ law = "none" }}
-{extra}
-"""
 #: past the first impact's force maximum
 FIRST_IMPACT = 0.0025
 FORCE_PEAK = 5  # event_kind of a force maximum
 
 
 def _build(tmp_path, solver: str, duration: float, extra: str = ""):
-    path = tmp_path / "four_bar.toml"
-    path.write_text(SCENE.format(urdf=(DATA / "four_bar_torque_driven.urdf").as_posix(), duration=duration, solver=solver, extra=extra))
+    # damped impacts (restitution 0.8)
+    path = four_bar_torque_scene(tmp_path / "four_bar.toml", name="four_bar_torque_damped", duration=duration, solver=solver, restitution=0.8, extra=extra)
     return build_run(str(path))
 
 
