@@ -6,9 +6,11 @@
   interpolant; now the stages use the approach rate and the onset is located on
   the method's own steps from the step's start (:class:`RestepDense`);
 * a restart state (the located onset) is checked as an accepted step's end is;
-* a step short only because the span is short is no step-size collapse, and a
-  collapse's message shows the step below the limit;
-* a failing Newmark run names Newmark;
+* a step short only because the span is short is still a step-size collapse (the
+  user's min_step is kept), and its message says to lower min_step; a collapse's
+  message shows the step below the limit;
+* a failing Newmark run names Newmark, and a Newton divergence met while restepping
+  keeps its cause;
 * a trial stage of an explicit method in a pose the contact law refuses is rejected
   without numpy's "invalid value" warning.
 """
@@ -204,3 +206,17 @@ def test_a_refused_trial_stage_is_rejected_without_numpy_warnings(method):
     assert trajectory.success, trajectory.message
     assert trajectory.n_rejected > 0  # the overshooting first step
     assert trajectory.y[-1, 0] == pytest.approx(math.exp(-10.0), rel=1e-6)
+
+
+def test_a_solver_failure_met_while_restepping_keeps_its_cause(monkeypatch):
+    """GenAlpha's Newton iterations diverging while it resteps to locate an onset: "Newton divergence", as in a
+    step of its own (it was reported as a "solver error", a RuntimeError)."""
+    from robot.integration.solvers import StepFailure
+
+    def diverging(self):
+        raise StepFailure("Newton divergence", "GenAlpha: Newton iterations diverged, restepping from t=0 s to locate a contact onset")
+
+    monkeypatch.setattr(EventDrivenIntegrator, "advance", diverging)
+    trajectory = EventDrivenIntegrator(_decay_system(), np.array([1.0]), (0.0, 1.0), SolverOptions("RK4", first_step=1e-3)).run()
+    assert trajectory.status == -1 and trajectory.cause == "Newton divergence", trajectory.message
+    assert "restepping" in trajectory.message

@@ -36,12 +36,13 @@ def run_cli(capsys, *argv) -> tuple[int, str, str]:
 @pytest.mark.parametrize(
     "options, named",
     [
-        (("--rtol", "5"), ["--rtol=5.0", "[1e-13, 0.1]"]),
-        (("--rtol", "1e-30"), ["--rtol=1e-30", "[1e-13, 0.1]"]),
+        (("--rtol", "5"), ["--rtol=5.0", "[2.220446049250313e-14, 0.1]"]),
+        (("--rtol", "1e-30"), ["--rtol=1e-30", "[2.220446049250313e-14, 0.1]"]),
         (("--atol", "1"), ["--atol=1.0", "0.1]"]),
         (("--max-step", "0"), ["--max-step=0.0", "out of range"]),
         (("--first-step", "1", "--max-step", "0.001"), ["--first-step=1.0", "(0, 0.001]", "--max-step"]),
         (("--first-step", "0.01"), ["--first-step=0.01", "(0, 0.001]"]),  # above the default max_step
+        (("--max-step", "1e-14"), ["--max-step=1e-14", "limits.min_step = 1e-13 s", "scene ideal"]),  # below the scene's min_step
     ],
     ids=lambda v: " ".join(v) if isinstance(v, tuple) else None,
 )

@@ -35,6 +35,7 @@ from pathlib import Path
 
 from robot.cli.common import EXIT_INTERRUPTED, EXIT_OK, EXIT_RUN_FAILED, UsageError, writable_folder
 from robot.cli.interrupts import Phase, clean_stops
+from robot.errors import RobotError
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -89,4 +90,9 @@ def _check_options(args: argparse.Namespace) -> None:
     step = args.exudyn_step
     if step is not None and not (math.isfinite(step) and step > 0):
         raise UsageError(f"--exudyn-step={step!r} must be a finite number > 0")
-    check_scenes(args)
+    try:
+        check_scenes(args)
+    except ValueError as exc:
+        if isinstance(exc, RobotError):  # UnsupportedFeatureError: exit 2 with its own message
+            raise
+        raise UsageError(str(exc)) from None  # a solver option against a scene's limits

@@ -421,16 +421,10 @@ def _check_rtol(rtol: float, option: str) -> None:
 
 
 def _check_steps(args: argparse.Namespace, methods: list[str], limits) -> None:
-    """``--steps`` and ``--max-step`` not below the smallest step the scene's runs can take (checked before any run)."""
+    """``--max-step`` not below the smallest step the scene's variable-step runs can take (checked before any run;
+    ``min_step`` is no limit of the fixed-step methods' ``--steps``)."""
     if args.skip_sweep:
         return
-    if args.steps and any(method in FIXED_STEP_METHODS for method in methods):
-        for h in args.steps:
-            if h < limits.min_step:
-                raise UsageError(
-                    f"--steps: step {h:g} s is out of range [{limits.min_step:g}, inf): a fixed-step method's step must be >= "
-                    f"the scene's limits.min_step = {limits.min_step:g} s"
-                )
     for method in methods:
         if method in FIXED_STEP_METHODS:
             continue
@@ -449,6 +443,8 @@ def execute(args: argparse.Namespace) -> int:
     with clean_stops() as stops:
         run = build_run(args.scene)  # a stop before the benchmark has ended: exit 130, nothing written
         _check_steps(args, methods, run.scene.limits)
+        if not args.skip_stability and run.dynamics.contacts:
+            stability.scaled_stiffness(run.scene)  # a law the stiffness map cannot scale: exit 2 now, not after the sweep
         out = writable_folder(args.out or Path("results") / "work_precision" / run.scene.file_stem)
         phases = _Phases(args, run, out, stop=lambda: stops.requested)
         stops.saving = f"saving the finished runs to {phases.json_path}"

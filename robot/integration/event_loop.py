@@ -54,7 +54,7 @@ from robot.integration.force_peaks import ForcePeaks, derivative_or_refused, ref
 from robot.integration.options import STALL_WINDOW, FailureLimits, SolverOptions
 from robot.integration.records import FAILED, SUCCESS, OutputTimes, Records, Trajectory
 from robot.integration import records as R
-from robot.integration.solvers import SecondOrderStructure, make_solver
+from robot.integration.solvers import SecondOrderStructure, StepFailure, make_solver
 
 #: restarts at one instant before the run is declared failed (contact events that make no progress)
 MAX_STALLED_RESTARTS = 20
@@ -200,6 +200,8 @@ class EventDrivenIntegrator:
             status, cause, message = FAILED, failure.cause, str(failure)
         except ContactLawError as exc:
             status, cause, message = FAILED, "contact law error", f"t={self.t:.9g} s: {exc}"
+        except StepFailure as exc:  # a solver's own failure met outside its step (restepping to locate an onset)
+            status, cause, message = FAILED, exc.failure_cause, f"t={self.t:.9g} s: {exc}"
         except (np.linalg.LinAlgError, RuntimeError, ValueError, ArithmeticError) as exc:
             status, cause, message = FAILED, "solver error", f"t={self.t:.9g} s: {self.options.method}: {type(exc).__name__}: {exc}"
         except KeyboardInterrupt:

@@ -70,6 +70,15 @@ def _step_size_setting(solver) -> float:
 _FIXED_STEP_SIZE = property(_step_size_setting)
 
 
+class StepFailure(RuntimeError):
+    """A solver's failure met outside its own step (a fixed-step method restepping to locate a contact onset),
+    with the run's failure cause (``failure_cause``, as a failed step sets it on the solver)."""
+
+    def __init__(self, failure_cause: str, message: str):
+        super().__init__(message)
+        self.failure_cause = failure_cause
+
+
 class FixedStepRK4(OdeSolver):
     """Classical fourth-order Runge-Kutta with a constant step ``first_step``.
 
@@ -345,7 +354,7 @@ class GeneralizedAlpha(OdeSolver):
             self.n_restep_calls += self.nfev - calls
             self.njev += replica.njev - jacobians
             if result is None:
-                raise RuntimeError(f"{self._divergence_message(t_old + h, h)}, restepping from t={t_old:.9g} s to locate a contact onset")
+                raise StepFailure("Newton divergence", f"{self._divergence_message(t_old + h, h)}, restepping from t={t_old:.9g} s to locate a contact onset")
             return result[0]
 
         return RestepDense(t_old, self.t, start[1], restep)

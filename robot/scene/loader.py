@@ -144,7 +144,7 @@ _SOLVER_KEYS = {"method", "rtol", "atol", "max_step", "first_step", "jacobian"}
 #: ``clearance work-precision --tolerances/--candidates``. The lower bound is what the
 #: integrators honour: scipy's methods replace an rtol below ``100 * eps`` (2.2e-14) by
 #: it with a warning, so a smaller value would be run as another than the one recorded.
-RTOL_RANGE = (1e-13, 1e-1)
+RTOL_RANGE = (100 * float(np.finfo(float).eps), 1e-1)
 #: valid ``[solver] atol`` (closed range)
 ATOL_RANGE = (1e-16, 1e-1)
 _BAUMGARTE_KEYS = {"alpha", "beta"}
@@ -729,12 +729,12 @@ def smallest_step(method: str, limits: FailureLimits) -> float:
 
 
 def check_steps(solver: SolverOptions, limits: FailureLimits, where: str) -> None:
-    """``[solver] max_step`` not below :func:`smallest_step`, ``first_step`` (a fixed-step method's step) not below ``limits.min_step``.
-
-    Such a run could never proceed: a variable-step method's steps would all be a
-    step-size collapse (CVODE refuses the ``max_step`` outright), a fixed-step run
-    would creep until ``max_steps`` stops it.
+    """A variable-step method's ``[solver] max_step`` not below :func:`smallest_step`, its ``first_step`` not below
+    ``limits.min_step``: such a run could never proceed, every step would be a step-size collapse (CVODE refuses
+    the ``max_step`` outright). ``min_step`` is no limit of the fixed-step methods (their step is ``first_step``).
     """
+    if solver.method in FIXED_STEP_METHODS:
+        return
     w = f"{where} [solver]"
     floor = smallest_step(solver.method, limits)
     if solver.max_step < floor:
@@ -747,9 +747,8 @@ def check_steps(solver: SolverOptions, limits: FailureLimits, where: str) -> Non
             value=solver.max_step,
         )
     if solver.first_step is not None and solver.first_step < limits.min_step:
-        what = f"the step of the fixed-step method {solver.method}" if solver.method in FIXED_STEP_METHODS else "a first step"
         raise SceneError(
-            f"{w}: first_step={solver.first_step!r} must be >= limits.min_step = {limits.min_step:g} s: {what} below it is a step-size collapse",
+            f"{w}: first_step={solver.first_step!r} must be >= limits.min_step = {limits.min_step:g} s: a first step below it is a step-size collapse",
             key="first_step",
             value=solver.first_step,
         )
@@ -762,7 +761,7 @@ def _rtol(solver_table: dict, where: str) -> float:
     except SceneError as exc:
         value = solver_table.get("rtol")
         if isinstance(value, (int, float)) and not isinstance(value, bool) and 0 < value < RTOL_RANGE[0]:
-            raise SceneError(f"{exc} (the integrators' floor, rounded up: scipy's replace an rtol below 100 eps = 2.2e-14 by 2.2e-14)", key="rtol", value=value) from None
+            raise SceneError(f"{exc} (scipy's integrators replace an rtol below 100 eps = 2.2e-14 by 2.2e-14)", key="rtol", value=value) from None
         raise
 
 

@@ -48,6 +48,7 @@ from robot.model.platform_kinematics import platform_state
 from robot.run import Run, build_run, run_scene
 from robot.integration.simulation import SolverOptions
 from robot.scene.loader import load_scene
+from robot.scene.loader import check_steps
 from robot.scene.loader import solver_options as scene_solver_table
 from robot.validation import comparison as CMP
 from robot.validation import exudyn_model as EX
@@ -409,8 +410,14 @@ def check_scenes(args: argparse.Namespace) -> None:
     scene, the engine, the feature and what the engine supports.
     """
     durations = scene_durations(args)
+    solver = solver_from_options(args)
     for scene in args.scenes:
-        check_engines(scene, build_run(scene, duration=durations[scene]), args.engines)
+        run = build_run(scene, duration=durations[scene])
+        try:  # the validation solver's steps against the scene's own limits (limits.min_step), as a scene's are
+            check_steps(solver, run.scene.limits, f"--scenes {scene}")
+        except SceneError as exc:
+            raise ValueError(f"{_option_message(exc)} (scene {scene}'s limits)") from None
+        check_engines(scene, run, args.engines)
 
 
 def check_engines(scene: str, run: Run, engines: Sequence[str]) -> None:

@@ -48,6 +48,7 @@ class Outcome:
     max_residual: float = math.nan
     energy_error: float = math.nan  # max |Delta(T + V) - W_act - W_contact - W_force| (J)
     actuator_work_scale: float = math.nan  # max |W_act| (J), to make energy_error relative
+    energy_scale: float = math.nan  # max(max T, max V - min V) (J): energy_error's scale without actuator work
     peaks: dict = field(default_factory=dict)  # joint -> peak normal force (N) over the run
     impulses: dict = field(default_factory=dict)  # joint -> integral of the normal forces (N s)
     grid_t: np.ndarray | None = None
@@ -142,6 +143,7 @@ def simulate(
     balance = (energy - energy[0]) - work
     outcome.energy_error = float(np.max(np.abs(balance)))
     outcome.actuator_work_scale = float(np.max(np.abs(result["actuator_work"])))
+    outcome.energy_scale = float(max(np.max(result["kinetic_energy"]), np.ptp(result["potential_energy"])))
     for joint in result.clearance_joints or [c.site.name for c in dynamics.contacts]:
         force = np.atleast_2d(result[f"{joint}_normal_force"].T).T
         total = force.sum(axis=1)

@@ -31,10 +31,17 @@ A cell of maps 1 and 2 says what a user needs to know of the run (``result``):
 * ``no reference`` (:data:`UNCHECKED`): it finished, but the reference run
   failed, so its accuracy is unknown.
 
+Every cell also has ``finished``: True when the run ended without a failure cause
+(``result`` was ``"ok"`` for it before the classification split that into
+``accurate`` and ``inaccurate``). A cell of the hidden-contact map is ``"ok"``
+(:data:`FINISHED`) or the failure cause, and has ``finished`` too.
+
 The reference (:func:`robot.analysis.studies.work_precision.reference`) is
 DOP853 at rtol 1e-11 checked against rtol 1e-10: pointwise measures are taken
 on the output grid (:data:`OUTPUT_STEP`) of the window where the two agree to
-1e-8 m. The stiffness map's boundary is the largest *accurate* step.
+1e-8 m. The measures are :func:`robot.analysis.studies.work_precision.errors`. The
+stiffness map's ``boundary`` is the largest step that finished (as before the
+classification), ``boundary_accurate`` the largest accurate one.
 
 Every run goes through :func:`robot.integration.simulation.integrate`, which never raises on
 divergence: the maps record ``result`` and ``message``. A map stopped by the user
@@ -68,14 +75,21 @@ OK = ACCURATE = "accurate"
 INACCURATE = "inaccurate"
 #: a run that finished, but whose reference run failed: its accuracy is unknown
 UNCHECKED = "no reference"
-#: a run of the hidden-contact map that finished (that map measures the peak forces only)
-FINISHED = "finished"
-#: results that are not failures
-NOT_FAILED = (OK, INACCURATE, UNCHECKED, FINISHED, "ok")  # "ok": maps written before the classification
+#: a run of the hidden-contact map that finished (that map measures the peak forces only), and a finished
+#: cell of a stiffness or gain map written before the classification
+FINISHED = "ok"
+#: results that are not failures ("finished": the hidden-contact map's value for one commit)
+NOT_FAILED = (OK, INACCURATE, UNCHECKED, FINISHED, "finished")
 
 
 def _cause(outcome) -> str:
     return FINISHED if outcome.success else (outcome.cause or "failed")
+
+
+def finished(cell: dict) -> bool:
+    """Whether a map cell's run ended without a failure cause (its ``finished``; a map written before it had
+    the flag: from its ``result``)."""
+    return bool(cell["finished"]) if "finished" in cell else cell.get("result") in NOT_FAILED
 
 
 # --------------------------------------------------------------------------------------
@@ -89,7 +103,9 @@ THRESHOLDS = {
     "ee": wp.EE_TARGET,  # m: max |p_ee - p_ee,ref| on the output grid of the comparable window
     "driving": 1e-2,  # max |F - F_ref| / max |F_ref| over the actuators, same grid and window
     "peak_force": wp.PEAK_TARGET,  # max over clearance joints of |peak - peak_ref| / peak_ref over [0, T]
-    "energy_relative": 1e-2,  # the run's max |Delta(T + V) - W| (J) over the reference's max |W_act|, [0, T]
+    # the run's max |Delta(T + V) - W| (J) over the reference's max |W_act| (without actuator work: over its
+    # max(max T, max V - min V), work_precision.Reference.energy_scale), [0, T]
+    "energy_relative": 1e-2,
     "drift": wp.DRIFT_TARGET,  # m: the run's own max |Phi| over [0, T]
 }
 #: what each measure is called in messages and figures (and its one-letter code in the stiffness figure)
@@ -104,57 +120,22 @@ MEASURES = {
 OUTPUT_STEP = 1e-4
 
 
-def _relative(value: float, ref: float) -> float:
-    return abs(value - ref) / abs(ref) if ref else abs(value)
-
-
-def accuracy(outcome: Outcome, ref: wp.Reference) -> dict:
-    """The measures of :data:`THRESHOLDS` of a finished run against ``ref`` (same scene, horizon and output grid).
-
-    ``None``: the measure does not apply to the scene (no actuator, no clearance joint, no actuator
-    work); NaN: it applies but could not be taken (counted as beyond its threshold). Also, for the
-    record: ``driving_n`` (the driving-force error in N), ``peak_force_by_joint``, ``impulse`` and
-    ``energy`` (J).
-    """
-    r = ref.outcome
-    out: dict = {"drift": outcome.max_residual, "energy": outcome.energy_error}
-    out["energy_relative"] = outcome.energy_error / r.actuator_work_scale if r.actuator_work_scale > 0 else None
-    n = len(r.grid_t)
-    same_grid = outcome.grid_t is not None and len(outcome.grid_t) == n and np.allclose(outcome.grid_t, r.grid_t)
-    window = r.grid_t <= ref.window + 1e-12
-    out["ee"] = out["driving"] = out["driving_n"] = math.nan
-    if same_grid and window.any():
-        out["ee"] = float(np.max(np.linalg.norm(outcome.grid_ee[window] - r.grid_ee[window], axis=1)))
-        scale = float(np.max(np.abs(r.grid_force[window]))) if r.grid_force[window].size else 0.0
-        if scale > 0:
-            out["driving_n"] = float(np.max(np.abs(outcome.grid_force[window] - r.grid_force[window])))
-            out["driving"] = out["driving_n"] / scale
-        else:
-            out["driving"] = out["driving_n"] = None
-    if r.peaks:
-        by_joint = {j: _relative(outcome.peaks.get(j, math.nan), p) for j, p in r.peaks.items()}
-        out["peak_force"] = max(by_joint.values())
-        out["peak_force_by_joint"] = by_joint
-        out["impulse"] = max(_relative(outcome.impulses.get(j, math.nan), p) for j, p in r.impulses.items())
-    else:
-        out["peak_force"] = out["impulse"] = None
-    return out
-
-
 def beyond_thresholds(errors: dict) -> list[str]:
-    """The measures of :data:`THRESHOLDS` beyond their threshold (NaN counts as beyond; None: not applicable)."""
-    return [key for key, limit in THRESHOLDS.items() if errors.get(key) is not None and not errors[key] <= limit]
+    """The measures of :data:`THRESHOLDS` beyond (>) their threshold (NaN counts as beyond; None, or a measure
+    missing from ``errors``: not applicable)."""
+    return wp.beyond(errors, THRESHOLDS)
 
 
 def classify(outcome: Outcome, ref: wp.Reference | None) -> dict:
-    """``result`` (:data:`OK`, :data:`INACCURATE`, :data:`UNCHECKED` or the failure cause), ``errors``, ``inaccurate_by``."""
+    """``result`` (:data:`OK`, :data:`INACCURATE`, :data:`UNCHECKED` or the failure cause), ``finished``
+    (no failure cause), ``errors`` (:func:`robot.analysis.studies.work_precision.errors`), ``inaccurate_by``."""
     if not outcome.success:
-        return {"result": outcome.cause or "failed", "errors": None, "inaccurate_by": []}
+        return {"result": outcome.cause or "failed", "finished": False, "errors": None, "inaccurate_by": []}
     if ref is None:
-        return {"result": UNCHECKED, "errors": None, "inaccurate_by": []}
-    errors = accuracy(outcome, ref)
+        return {"result": UNCHECKED, "finished": True, "errors": None, "inaccurate_by": []}
+    errors = wp.errors(outcome, ref)
     beyond = beyond_thresholds(errors)
-    return {"result": INACCURATE if beyond else OK, "errors": errors, "inaccurate_by": beyond}
+    return {"result": INACCURATE if beyond else OK, "finished": True, "errors": errors, "inaccurate_by": beyond}
 
 
 def describe(cell: dict) -> str:
@@ -196,6 +177,7 @@ def _reference(run: Run, t_end: float, label: str, finished: dict, stop) -> tupl
         "peak_force": ref.outcome.peaks,
         "driving_force_max": float(np.max(np.abs(ref.outcome.grid_force))) if ref.outcome.grid_force.size else None,
         "actuator_work_max": ref.outcome.actuator_work_scale,
+        "energy_scale": ref.energy_scale,
     }
     return ref, summary
 
@@ -221,8 +203,9 @@ def stiffness_map(
 
     Per scale: the scene with every contact stiffness scaled (:func:`scaled_stiffness`), a tight
     reference of it over [0, t_end] (``reference``), then the cells, each classified against it
-    (:func:`classify`). ``boundary``: per method and scale the largest step that is accurate;
-    ``boundary_finished``: the largest that finished (accurate or not). ``folder``: not used (the
+    (:func:`classify`). ``boundary``: per method and scale the largest step that finished (accurate
+    or not, its meaning before the classification); ``boundary_accurate``: the largest that is
+    accurate. ``folder``: not used (the
     variants are the scene with ``overrides``, recorded in ``scaled``); kept for callers.
     SceneError before any run if the scene's contact stiffness cannot be scaled.
     """
@@ -244,10 +227,11 @@ def stiffness_map(
             _adaptive_run(out, run, ref, scale, adaptive, adaptive_rtol, t_end, progress, stop)
     finally:  # a stopped map keeps the boundaries of what it ran
         out["boundary"] = {
-            method: {repr(scale): _largest(rows, scale, (OK,)) for scale in scales} for method, rows in out["methods"].items()
+            method: {repr(scale): _largest(rows, scale, finished) for scale in scales} for method, rows in out["methods"].items()
         }
-        out["boundary_finished"] = {
-            method: {repr(scale): _largest(rows, scale, (OK, INACCURATE, UNCHECKED)) for scale in scales} for method, rows in out["methods"].items()
+        out["boundary_accurate"] = {
+            method: {repr(scale): _largest(rows, scale, lambda row: row["result"] == OK) for scale in scales}
+            for method, rows in out["methods"].items()
         }
     return out
 
@@ -282,9 +266,9 @@ def _adaptive_run(out: dict, run: Run, ref, scale: float, adaptive: str, adaptiv
         progress(f"{label}: {outcome.n_steps} steps, {describe(cell)}")
 
 
-def _largest(rows, scale: float, results) -> float | None:
-    """Largest step size at ``scale`` whose result is one of ``results`` (None if none is)."""
-    hs = [r["h"] for r in rows if r["scale"] == scale and r["result"] in results]
+def _largest(rows, scale: float, keep: Callable[[dict], bool]) -> float | None:
+    """Largest step size at ``scale`` of a row that ``keep`` accepts (None if none is)."""
+    hs = [r["h"] for r in rows if r["scale"] == scale and keep(r)]
     return max(hs) if hs else None
 
 
@@ -444,7 +428,8 @@ def hidden_contact_map(
 ) -> dict:
     """Onsets, guard detections, overshoot and outcome per (method, tolerance, guard).
 
-    ``result``: :data:`FINISHED` or the failure cause. With ``reference_peaks`` (a tight run's
+    ``result``: :data:`FINISHED` (``"ok"``) or the failure cause; ``finished``: no failure cause.
+    With ``reference_peaks`` (a tight run's
     peak normal force per joint over the same horizon) a finished run also gets
     ``peak_force_error`` and, beyond the peak-force threshold of :data:`THRESHOLDS`,
     ``inaccurate_by = ["peak_force"]`` (this map measures no other error).
@@ -462,6 +447,7 @@ def hidden_contact_map(
                     "rtol": tol,
                     "guard": guard,
                     "result": _cause(outcome),
+                    "finished": outcome.success,
                     "message": outcome.message,
                     "onsets": outcome.n_events,
                     "hidden_found": outcome.n_hidden_contacts,
@@ -470,7 +456,7 @@ def hidden_contact_map(
                     "cpu_time": outcome.cpu_time,
                 }
                 if reference_peaks and outcome.success:
-                    row["peak_force_error"] = max(_relative(outcome.peaks.get(j, math.nan), p) for j, p in reference_peaks.items())
+                    row["peak_force_error"] = max(wp.relative_error(outcome.peaks.get(j, math.nan), p) for j, p in reference_peaks.items())
                     row["inaccurate_by"] = beyond_thresholds({"peak_force": row["peak_force_error"]})
                 out["runs"].append(row)
                 if progress:
@@ -493,8 +479,8 @@ COLOURS = {
     OK: "#4caf50",
     INACCURATE: "#ffe082",
     UNCHECKED: "#ffffff",
-    FINISHED: "#ffffff",
-    "ok": "#ffffff",  # a map written before the classification: finished, accuracy not checked
+    FINISHED: "#ffffff",  # "ok": hidden-contact map, or a map written before the classification: accuracy not checked
+    "finished": "#ffffff",
     "penetration beyond physical bound": "#e53935",
     "non-finite state": "#8e24aa",
     "unphysical pose": "#f06292",
@@ -514,7 +500,7 @@ def _legend_label(result: str) -> str:
         return "accurate: finished, every measure within its threshold"
     if result == INACCURATE:
         return "inaccurate: finished, letters = measures beyond their thresholds"
-    if result in (UNCHECKED, FINISHED, "ok"):
+    if result in (UNCHECKED, FINISHED, "finished"):
         return "finished, accuracy not checked" + (" (reference run failed)" if result == UNCHECKED else "")
     return f"failed: {result}"
 
@@ -524,10 +510,13 @@ def _codes(row: dict) -> str:
 
 
 def _thresholds_note(data: dict) -> str:
-    t = data.get("thresholds") or THRESHOLDS
+    """The thresholds a classified map checked its cells against ("" for a map written before the classification)."""
+    t = data.get("thresholds")
+    if not t:
+        return ""
     return (
         f"against DOP853 rtol 1e-11 over the same horizon: x end effector > {t['ee']:g} m, F driving forces > {100 * t['driving']:g} %, "
-        f"P peak contact force > {100 * t['peak_force']:g} %, E energy balance > {100 * t['energy_relative']:g} % of the actuator work, "
+        f"P peak contact force > {100 * t['peak_force']:g} %, E energy balance > {100 * t['energy_relative']:g} % of the actuator work (none: of the mechanical energy), "
         f"d drift > {t['drift']:g} m"
     )
 
@@ -535,7 +524,7 @@ def _thresholds_note(data: dict) -> str:
 def _class_handles(results) -> list:
     from matplotlib.patches import Patch
 
-    order = [OK, INACCURATE, UNCHECKED, FINISHED, "ok"]
+    order = [OK, INACCURATE, UNCHECKED, FINISHED, "finished"]
     ordered = [r for r in order if r in results] + sorted(r for r in results if r not in order)
     handles, seen = [], set()
     for result in ordered:
@@ -567,7 +556,7 @@ def plot_stiffness(data: dict, path) -> None:
             ax.scatter(row["scale"], row["h"], s=170, marker="s", color=COLOURS.get(result, "#000000"), hatch=hatch, edgecolors="k", linewidths=0.4)
             if result == INACCURATE:
                 ax.annotate(_codes(row), (row["scale"], row["h"]), xytext=(8, -3), textcoords="offset points", fontsize=7)
-        for key, style in (("boundary", "k-"), ("boundary_finished", "k--")):
+        for key, style in (("boundary_accurate", "k-"), ("boundary", "k--")):
             limits = (data.get(key) or {}).get(method, {})
             line = [(s, limits[repr(s)]) for s in scales if limits.get(repr(s))]
             if line:
@@ -585,7 +574,7 @@ def plot_stiffness(data: dict, path) -> None:
         xs = [float(k) for k in adaptive]
         ax.loglog(xs, [adaptive[k]["mean_step"] for k in adaptive], "-", color="0.4", label=f"{next(iter(adaptive.values()))['method']} mean step")
         for k, entry in adaptive.items():
-            result = entry.get("result", "ok")
+            result = entry.get("result", FINISHED)
             results.add(result)
             hatch = INACCURATE_HATCH if result == INACCURATE else None
             ax.scatter(float(k), entry["mean_step"], s=90, marker="o", color=COLOURS.get(result, "#000000"), hatch=hatch, edgecolors="k", linewidths=0.4, zorder=3)
@@ -600,17 +589,15 @@ def plot_stiffness(data: dict, path) -> None:
     ax.set_title(f"explicit adaptive method ({what.get('method', '')} rtol {what.get('rtol', math.nan):g}): mean accepted step", fontsize=10)
     ax.grid(True, which="both", alpha=0.3)
     ax.legend(fontsize=8)
-    handles = _class_handles(results) + [
-        Line2D([], [], color="k", lw=1, label="largest accurate step"),
-        Line2D([], [], color="k", lw=1, ls="--", label="largest step that finished"),
-    ]
+    classified = "boundary_accurate" in data  # else a map written before the classification: no accuracy claimed
+    lines = [Line2D([], [], color="k", lw=1, label="largest accurate step")] if classified else []
+    handles = _class_handles(results) + lines + [Line2D([], [], color="k", lw=1, ls="--", label="largest step that finished")]
     fig.legend(handles=handles, loc="lower center", ncol=3, fontsize=8)
-    fig.suptitle(
-        f"Step size against contact stiffness ({data['scene']}; Young's moduli and explicit stiffness keys scaled): "
-        "failed (cause), finished but inaccurate, or accurate\n"
-        + _thresholds_note(data),
-        fontsize=9,
-    )
+    if classified:
+        title = "failed (cause), finished but inaccurate, or accurate\n" + _thresholds_note(data)
+    else:
+        title = "failed (cause) or finished (accuracy not checked: a map written before the classification)"
+    fig.suptitle(f"Step size against contact stiffness ({data['scene']}; Young's moduli and explicit stiffness keys scaled): " + title, fontsize=9)
     fig.tight_layout(rect=(0, 0.13, 1, 0.93))
     save_png(fig, path)
 
@@ -651,7 +638,8 @@ def plot_baumgarte(data: dict, path) -> None:
     fig.legend(handles=_class_handles(results), loc="lower center", ncol=3, fontsize=8)
     fig.suptitle(
         f"Baumgarte gains ({data['scene']}, [0, {data['t_end']:g}] s): numbers: steps; labels: failure cause "
-        f"(drift limit {data['max_residual_limit']:g} m) or, hatched, the measures beyond their thresholds\n" + _thresholds_note(data),
+        f"(drift limit {data['max_residual_limit']:g} m)"
+        + (" or, hatched, the measures beyond their thresholds\n" + _thresholds_note(data) if data.get("thresholds") else ""),
         fontsize=9,
     )
     fig.tight_layout(rect=(0, 0.1, 1, 0.9))

@@ -18,8 +18,16 @@ Error measures (``errors``)
     * ``driving_rms``: max over actuators of |rms F - rms F_ref| / rms F_ref over [0, T];
     * ``drift``: the run's own max |Phi| (m);
     * ``energy``: the run's own max |Delta(T + V) - W_act - W_contact - W_force| (J; ``W_force``:
-      the force elements' work, where there are any), and
-      relative to max |W_act|.
+      the force elements' work, where there are any), and ``energy_relative``: relative to
+      the reference's max |W_act|, or, for a reference without actuator work (a passive
+      mechanism), to its largest mechanical energy :attr:`Reference.energy_scale` (the larger
+      of its peak kinetic energy and its potential-energy range);
+    * ``driving_n``: the ``driving`` error in N (max |F - F_ref|).
+
+    Not applicable (``None``): ``driving``, ``driving_n`` and ``driving_rms`` of a mechanism without
+    actuators, ``energy_relative`` of a reference that neither works nor moves. Applicable but not
+    measured (NaN: the run did not get there): counts as beyond every threshold
+    (:func:`beyond`). ``peak_force`` and ``impulse`` of a scene without clearance joints are 0.
 
 Sweep
     variable-step methods over tolerances (``atol = rtol / 100``), fixed-step
@@ -63,6 +71,10 @@ EE_TARGET = 1e-6
 PEAK_TARGET = 1e-2
 #: engineering accuracy: constraint drift (max |Phi|, m)
 DRIFT_TARGET = 1e-6
+#: the engineering accuracy as thresholds of :func:`errors` (each measure within, i.e. <=, its threshold)
+ENGINEERING = {"ee": EE_TARGET, "peak_force": PEAK_TARGET, "drift": DRIFT_TARGET}
+
+
 @dataclass
 class Reference:
     outcome: Outcome
@@ -70,6 +82,9 @@ class Reference:
     window: float  # t_c: the references agree to window_tolerance on [0, t_c]
     window_tolerance: float
     agreement: dict = field(default_factory=dict)  # errors of the check run against the reference
+    #: J: the reference's largest mechanical energy, max(max T, max V - min V), what ``energy_relative`` is
+    #: relative to when the reference has no actuator work (NaN: not computed, the actuators work)
+    energy_scale: float = math.nan
 
     def summary(self) -> dict:
         return {
@@ -78,6 +93,7 @@ class Reference:
             "comparable_window_s": self.window,
             "window_tolerance_m": self.window_tolerance,
             "check_against_reference": self.agreement,
+            "energy_scale_J": self.energy_scale,
         }
 
 
@@ -104,42 +120,59 @@ def reference(run: Run, t_end: float, output_step: float, window_tolerance: floa
         raise StudyStopped(f"reference runs failed: {ref.message}; {check.message}", done, reason="reference failed")
     window = comparable_window(ref, check, window_tolerance)
     reference = Reference(ref, check, window, window_tolerance)
+    if not ref.actuator_work_scale > 0:  # a passive mechanism: the energy balance is relative to its energy
+        reference.energy_scale = ref.energy_scale
     reference.agreement = errors(check, reference)
     return reference
 
 
-def _relative(value: float, ref: float) -> float:
+def relative_error(value: float, ref: float) -> float:
+    """|value - ref| / |ref| (|value| if ref is 0)."""
     return abs(value - ref) / abs(ref) if ref else abs(value)
 
 
+def beyond(errors: dict, thresholds: dict) -> list[str]:
+    """The measures of ``thresholds`` beyond (>) their threshold in ``errors``: NaN counts as beyond, None
+    (not applicable) and a missing key do not."""
+    return [key for key, limit in thresholds.items() if errors.get(key) is not None and not errors[key] <= limit]
+
+
 def errors(outcome: Outcome, ref: Reference) -> dict:
-    """The error measures of the module docstring (NaN where the run did not get there)."""
+    """The error measures of the module docstring (NaN where the run did not get there, None where a measure
+    does not apply), and ``engineering_accuracy`` (:data:`ENGINEERING`). The stability maps use them too."""
     r = ref.outcome
-    out = {"drift": outcome.max_residual, "energy": outcome.energy_error}
-    out["energy_relative"] = outcome.energy_error / r.actuator_work_scale if r.actuator_work_scale else math.nan
-    n = min(len(outcome.grid_t), len(r.grid_t))
+    out: dict = {"drift": outcome.max_residual, "energy": outcome.energy_error}
+    scale = r.actuator_work_scale if r.actuator_work_scale > 0 else ref.energy_scale
+    out["energy_relative"] = outcome.energy_error / scale if scale > 0 else (math.nan if math.isnan(scale) else None)
+    actuated = r.grid_force is not None and r.grid_force.ndim == 2 and r.grid_force.shape[1] > 0
+    n = min(len(outcome.grid_t), len(r.grid_t)) if outcome.grid_t is not None else 0
     window = (r.grid_t[:n] <= ref.window + 1e-12) if n else np.zeros(0, bool)
+    out["ee"] = out["driving"] = out["driving_n"] = math.nan
     if n and np.allclose(outcome.grid_t[:n], r.grid_t[:n]) and window.any():
-        ee = np.linalg.norm(outcome.grid_ee[:n][window] - r.grid_ee[:n][window], axis=1)
-        force = np.abs(outcome.grid_force[:n][window] - r.grid_force[:n][window])
-        out["ee"] = float(ee.max())
-        out["driving"] = float(force.max() / np.max(np.abs(r.grid_force[:n][window]))) if force.size else math.nan  # no actuator
-    else:
-        out["ee"] = out["driving"] = math.nan
+        out["ee"] = float(np.linalg.norm(outcome.grid_ee[:n][window] - r.grid_ee[:n][window], axis=1).max())
+        if actuated:
+            out["driving_n"] = float(np.abs(outcome.grid_force[:n][window] - r.grid_force[:n][window]).max())
+            f_max = float(np.max(np.abs(r.grid_force[:n][window])))
+            out["driving"] = out["driving_n"] / f_max if f_max > 0 else (math.inf if out["driving_n"] > 0 else 0.0)
+    if not actuated:
+        out["driving"] = out["driving_n"] = None
     complete = outcome.success and n == len(r.grid_t)
     if complete:
-        out["peak_force"] = max((_relative(outcome.peaks[j], r.peaks[j]) for j in r.peaks), default=0.0)
-        out["peak_force_by_joint"] = {j: _relative(outcome.peaks[j], r.peaks[j]) for j in r.peaks}
-        out["impulse"] = max((_relative(outcome.impulses[j], r.impulses[j]) for j in r.impulses), default=0.0)
-        rms = np.sqrt(np.mean(outcome.grid_force**2, axis=0))
-        rms_ref = np.sqrt(np.mean(r.grid_force**2, axis=0))
-        out["driving_rms"] = float(np.max(np.abs(rms - rms_ref) / rms_ref)) if rms.size else math.nan
+        by_joint = {j: relative_error(outcome.peaks.get(j, math.nan), r.peaks[j]) for j in r.peaks}
+        out["peak_force"] = max(by_joint.values(), default=0.0)
+        out["peak_force_by_joint"] = by_joint
+        out["impulse"] = max((relative_error(outcome.impulses.get(j, math.nan), r.impulses[j]) for j in r.impulses), default=0.0)
+        if actuated:
+            rms = np.sqrt(np.mean(outcome.grid_force**2, axis=0))
+            rms_ref = np.sqrt(np.mean(r.grid_force**2, axis=0))
+            out["driving_rms"] = float(np.max(np.abs(rms - rms_ref) / rms_ref))
+        else:
+            out["driving_rms"] = None
     else:
-        out["peak_force"] = out["impulse"] = out["driving_rms"] = math.nan
+        out["peak_force"] = out["impulse"] = math.nan
+        out["driving_rms"] = math.nan if actuated else None
         out["peak_force_by_joint"] = {}
-    out["engineering_accuracy"] = bool(
-        complete and out["ee"] <= EE_TARGET and out["peak_force"] <= PEAK_TARGET and outcome.max_residual < DRIFT_TARGET
-    )
+    out["engineering_accuracy"] = bool(complete and not beyond(out, ENGINEERING))
     return out
 
 
@@ -177,6 +210,11 @@ def cheapest_accurate(rows: list[dict]) -> dict | None:
     return min(good, key=lambda r: r["cpu_time"]) if good else None
 
 
+def _positive(value) -> bool:
+    """A measured, finite, positive error (None: not applicable; NaN: not measured)."""
+    return value is not None and bool(np.isfinite(value)) and value > 0
+
+
 def plot(rows: list[dict], ref: dict, t_end: float, path, title: str) -> None:
     """Error against CPU time, one line per method (four error measures); ``ref`` is :meth:`Reference.summary`."""
     import matplotlib
@@ -201,7 +239,7 @@ def plot(rows: list[dict], ref: dict, t_end: float, path, title: str) -> None:
         floor = []
         for i, method in enumerate(methods):
             mine = [r for r in rows if r["options"]["method"] == method]
-            ok = [r for r in mine if r["status"] == 0 and np.isfinite(r["errors"].get(key, np.nan)) and r["errors"][key] > 0]
+            ok = [r for r in mine if r["status"] == 0 and _positive(r["errors"].get(key))]
             style = "--" if method in FIXED_STEP_METHODS else "-"
             colour = colours[i % len(colours)]
             if ok:
