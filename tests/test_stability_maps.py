@@ -139,7 +139,9 @@ def _outcome(offset: float = 0.0, *, success: bool = True, energy_error: float =
 def _reference(energy_scale: float = float("nan"), **options):
     from robot.analysis.studies.work_precision import Reference
 
-    return Reference(_outcome(**options), _outcome(**options), window=0.01, window_tolerance=1e-9, energy_scale=energy_scale)
+    reference = _outcome(**options)
+    reference.energy_scale = energy_scale  # as simulate records it
+    return Reference(reference, _outcome(**options), window=0.01, window_tolerance=1e-9)
 
 
 def test_a_mechanism_without_actuators_is_classified_without_the_driving_forces():

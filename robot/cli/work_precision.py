@@ -53,7 +53,7 @@ from robot.integration.solvers import FIXED_STEP_METHODS, JACOBIAN_METHODS, METH
 from robot.run import build_run
 from robot.integration.simulation import SolverOptions
 from robot.integration.options import STRUCTURED
-from robot.scene.loader import RTOL_RANGE, shipped_scenes, smallest_step
+from robot.scene.loader import RTOL_RANGE, rtol_floor_reason, shipped_scenes, smallest_step
 from robot.analysis.studies import speed, stability
 from robot.analysis.studies.common import INTERRUPTED, StudyStopped, run_or_stop, simulate
 from robot.analysis.studies import work_precision as wp
@@ -416,8 +416,7 @@ def _check_rtol(rtol: float, option: str) -> None:
     """``UsageError`` if ``rtol`` is outside a scene's ``[solver] rtol`` range (:data:`robot.scene.loader.RTOL_RANGE`)."""
     low, high = RTOL_RANGE
     if not low <= rtol <= high:
-        why = ": scipy's integrators replace an rtol below 100 eps = 2.2e-14 by 2.2e-14" if rtol < low else ""
-        raise UsageError(f"{option}: rtol {rtol:g} is out of range [{low:g}, {high:g}] (the range of a scene's [solver] rtol{why})")
+        raise UsageError(f"{option}: rtol {rtol:g} is out of range [{low:g}, {high:g}] (the range of a scene's [solver] rtol){rtol_floor_reason(rtol)}")
 
 
 def _check_steps(args: argparse.Namespace, methods: list[str], limits) -> None:

@@ -263,11 +263,17 @@ def _subtree_links(link: str, children: dict[str, list[str]]) -> list[str]:
     return found
 
 
-def _check_moving_bodies_have_mass(joints: dict[str, JointDeclaration], massive: set[str], label: str) -> None:
-    """Refuse a movable joint whose subtree has no mass or inertia: a singular mass matrix."""
+def _children(joints: dict[str, JointDeclaration]) -> dict[str, list[str]]:
+    """Each link's child links, in the file's order of the joints."""
     children: dict[str, list[str]] = {}
     for joint in joints.values():
         children.setdefault(joint.parent, []).append(joint.child)
+    return children
+
+
+def _check_moving_bodies_have_mass(joints: dict[str, JointDeclaration], massive: set[str], label: str) -> None:
+    """Refuse a movable joint whose subtree has no mass or inertia: a singular mass matrix."""
+    children = _children(joints)
     for joint in joints.values():
         if joint.kind not in MOVABLE_KINDS:
             continue
@@ -364,9 +370,7 @@ def _check_no_cycle(links: list[str], joints: dict[str, JointDeclaration], paren
 
 def _check_one_tree(links: list[str], joints: dict[str, JointDeclaration], parent_joint: dict[str, str], label: str) -> None:
     """Refuse links that no chain of joints joins to the root (urdfdom's "two root links found")."""
-    children: dict[str, list[str]] = {}
-    for joint in joints.values():
-        children.setdefault(joint.parent, []).append(joint.child)
+    children = _children(joints)
     trees = [_subtree_links(link, children) for link in links if link not in parent_joint]
     if len(trees) <= 1:
         return

@@ -754,14 +754,21 @@ def check_steps(solver: SolverOptions, limits: FailureLimits, where: str) -> Non
         )
 
 
+def rtol_floor_reason(rtol: Any) -> str:
+    """Why an rtol below :data:`RTOL_RANGE` is refused, to append to the message ("" for any other value):
+    one wording for the scenes and ``clearance work-precision``."""
+    below = isinstance(rtol, (int, float)) and not isinstance(rtol, bool) and 0 < rtol < RTOL_RANGE[0]
+    return " (scipy's integrators replace an rtol below 100 eps = 2.2e-14 by 2.2e-14)" if below else ""
+
+
 def _rtol(solver_table: dict, where: str) -> float:
     """``rtol`` in :data:`RTOL_RANGE`; below it, the message says why (the integrators would not honour it)."""
     try:
         return _number(solver_table, "rtol", where, 1e-7, low=RTOL_RANGE[0], high=RTOL_RANGE[1])
     except SceneError as exc:
         value = solver_table.get("rtol")
-        if isinstance(value, (int, float)) and not isinstance(value, bool) and 0 < value < RTOL_RANGE[0]:
-            raise SceneError(f"{exc} (scipy's integrators replace an rtol below 100 eps = 2.2e-14 by 2.2e-14)", key="rtol", value=value) from None
+        if rtol_floor_reason(value):
+            raise SceneError(f"{exc}{rtol_floor_reason(value)}", key="rtol", value=value) from None
         raise
 
 

@@ -154,9 +154,14 @@ def pointwise_interpolated(series: EngineSeries, reference: EngineSeries, t_end:
 
 
 def _body_difference(origins: np.ndarray | None, reference: np.ndarray | None, mask: np.ndarray, at_times) -> np.ndarray | None:
-    """(points, bodies, 3) body-origin differences at the compared times (``at_times``: the reference there); None if not recorded."""
-    if origins is None or reference is None or origins.shape[1:] != reference.shape[1:]:
+    """(points, bodies, 3) body-origin differences at the compared times (``at_times``: the reference there); None if not recorded.
+
+    Every engine records the bodies of :func:`robot.validation.bodies.read_geometry`, in its order: other
+    shapes are a bug of an engine, raised, not a comparison left out."""
+    if origins is None or reference is None:
         return None
+    if origins.shape[1:] != reference.shape[1:]:
+        raise ValueError(f"body origins of shape {origins.shape[1:]} cannot be compared with the reference's {reference.shape[1:]}")
     return origins[mask] - at_times(reference)
 
 

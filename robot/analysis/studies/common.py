@@ -12,17 +12,15 @@ constraint drift and energy-balance error.
 from __future__ import annotations
 
 import math
-import tempfile
 import warnings
 from dataclasses import dataclass, field
 from typing import Callable, TypeVar
-from pathlib import Path
 
 import numpy as np
 
 from robot.io.atomic import atomic_write_png
 from robot.io.results import make_result
-from robot.run import Run, build_run
+from robot.run import Run
 from robot.integration.simulation import RECORD_OUTPUT, FailureLimits, SolverOptions, integrate
 
 
@@ -158,15 +156,6 @@ def simulate(
     return outcome
 
 
-def scene_variant(base: str, tables: str, folder: Path | None = None, name: str = "variant") -> Run:
-    """Build a run of scene ``base`` with extra TOML ``tables`` (e.g. other material stiffness)."""
-    folder = Path(folder or tempfile.mkdtemp(prefix="study-"))
-    path = folder / f"{name}.toml"
-    path.write_text(f'extends = "{base}"\nname = "{name}"\n{tables}\n', encoding="utf-8")
-    return build_run(str(path))
-
-
-#: the cause of a run stopped by Ctrl-C or SIGTERM (robot.integration.event_loop)
 INTERRUPTED = "interrupted"
 
 Result = TypeVar("Result")

@@ -78,8 +78,8 @@ UNCHECKED = "no reference"
 #: a run of the hidden-contact map that finished (that map measures the peak forces only), and a finished
 #: cell of a stiffness or gain map written before the classification
 FINISHED = "ok"
-#: results that are not failures ("finished": the hidden-contact map's value for one commit)
-NOT_FAILED = (OK, INACCURATE, UNCHECKED, FINISHED, "finished")
+#: results that are not failures
+NOT_FAILED = (OK, INACCURATE, UNCHECKED, FINISHED)
 
 
 def _cause(outcome) -> str:
@@ -205,9 +205,8 @@ def stiffness_map(
     reference of it over [0, t_end] (``reference``), then the cells, each classified against it
     (:func:`classify`). ``boundary``: per method and scale the largest step that finished (accurate
     or not, its meaning before the classification); ``boundary_accurate``: the largest that is
-    accurate. ``folder``: not used (the
-    variants are the scene with ``overrides``, recorded in ``scaled``); kept for callers.
-    SceneError before any run if the scene's contact stiffness cannot be scaled.
+    accurate. ``folder`` (where the variants' scene files went) is accepted for earlier callers and not
+    used: the variants are the scene with ``overrides``, recorded in ``scaled``. SceneError before any run if the scene's contact stiffness cannot be scaled.
     """
     base = load_scene(scene)
     scaled = scaled_stiffness(base)  # refuses a scene whose stiffness the map cannot scale
@@ -480,7 +479,6 @@ COLOURS = {
     INACCURATE: "#ffe082",
     UNCHECKED: "#ffffff",
     FINISHED: "#ffffff",  # "ok": hidden-contact map, or a map written before the classification: accuracy not checked
-    "finished": "#ffffff",
     "penetration beyond physical bound": "#e53935",
     "non-finite state": "#8e24aa",
     "unphysical pose": "#f06292",
@@ -500,7 +498,7 @@ def _legend_label(result: str) -> str:
         return "accurate: finished, every measure within its threshold"
     if result == INACCURATE:
         return "inaccurate: finished, letters = measures beyond their thresholds"
-    if result in (UNCHECKED, FINISHED, "finished"):
+    if result in (UNCHECKED, FINISHED):
         return "finished, accuracy not checked" + (" (reference run failed)" if result == UNCHECKED else "")
     return f"failed: {result}"
 
@@ -524,7 +522,7 @@ def _thresholds_note(data: dict) -> str:
 def _class_handles(results) -> list:
     from matplotlib.patches import Patch
 
-    order = [OK, INACCURATE, UNCHECKED, FINISHED, "finished"]
+    order = [OK, INACCURATE, UNCHECKED, FINISHED]
     ordered = [r for r in order if r in results] + sorted(r for r in results if r not in order)
     handles, seen = [], set()
     for result in ordered:

@@ -82,9 +82,12 @@ class Reference:
     window: float  # t_c: the references agree to window_tolerance on [0, t_c]
     window_tolerance: float
     agreement: dict = field(default_factory=dict)  # errors of the check run against the reference
-    #: J: the reference's largest mechanical energy, max(max T, max V - min V), what ``energy_relative`` is
-    #: relative to when the reference has no actuator work (NaN: not computed, the actuators work)
-    energy_scale: float = math.nan
+
+    @property
+    def energy_scale(self) -> float:
+        """J: the reference's largest mechanical energy, max(max T, max V - min V), what ``energy_relative`` is
+        relative to when the reference has no actuator work (NaN when the actuators work: their work is the scale)."""
+        return math.nan if self.outcome.actuator_work_scale > 0 else self.outcome.energy_scale
 
     def summary(self) -> dict:
         return {
@@ -120,8 +123,6 @@ def reference(run: Run, t_end: float, output_step: float, window_tolerance: floa
         raise StudyStopped(f"reference runs failed: {ref.message}; {check.message}", done, reason="reference failed")
     window = comparable_window(ref, check, window_tolerance)
     reference = Reference(ref, check, window, window_tolerance)
-    if not ref.actuator_work_scale > 0:  # a passive mechanism: the energy balance is relative to its energy
-        reference.energy_scale = ref.energy_scale
     reference.agreement = errors(check, reference)
     return reference
 
